@@ -1,0 +1,43 @@
+"""Serial upload of programs to the robot controller, for cells without a network.
+
+- :mod:`~rapidfix.link.frames`: frame layout, kinds, statuses, the frame decoder.
+- :mod:`~rapidfix.link.checksum`: CRC-16/CCITT-FALSE, computable in RAPID.
+- :mod:`~rapidfix.link.uploader`: the host side on pyserial (go-back-N window).
+- :mod:`~rapidfix.link.receiver`: the controller's state machine in Python.
+- :mod:`~rapidfix.link.simulator`: that receiver behind a pseudo-terminal.
+- :mod:`~rapidfix.link.faults`: seeded fault injection on the simulated line.
+- ``rapid/RfxRecv.mod``: the receiver in RAPID, loaded once on the controller.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rapidfix.link.faults import LinkFaults
+from rapidfix.link.frames import PROTOCOL_VERSION
+from rapidfix.link.simulator import SimulatedController
+from rapidfix.link.uploader import (
+    LinkSettings,
+    Uploader,
+    UploadPlan,
+    UploadResult,
+    open_port,
+    plan_upload,
+    upload_file,
+)
+
+RECEIVER_MODULE = Path(__file__).parent / "rapid" / "RfxRecv.mod"
+
+__all__ = [
+    "PROTOCOL_VERSION",
+    "RECEIVER_MODULE",
+    "LinkFaults",
+    "LinkSettings",
+    "SimulatedController",
+    "UploadPlan",
+    "UploadResult",
+    "Uploader",
+    "open_port",
+    "plan_upload",
+    "upload_file",
+]
