@@ -1,0 +1,20 @@
+"""Screw-theory kinematics for ABB robots.
+
+Product-of-exponentials forward kinematics, analytic all-branch inverse
+kinematics from Paden–Kahan subproblems, ABB confdata and frame conventions.
+Robot models are TOML files (`robots/`); `load_robot` finds them by name or path.
+Knows nothing of RAPID or of error models.
+"""
+
+from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
+from rapidfix.kinematics.model import RobotModel
+from rapidfix.kinematics.robot_file import available_robots, load_robot, read_robot_file
+
+__all__ = [
+    "IKSolutions",
+    "IKStatus",
+    "RobotModel",
+    "available_robots",
+    "load_robot",
+    "read_robot_file",
+]

@@ -1,0 +1,158 @@
+"""ABB confdata [cf1, cf4, cf6, cfx] and choosing a solution: by confdata or nearest.
+
+cf1, cf4, cf6 are the quadrants floor(θ / 90°) of axes 1, 4 and 6 (−1 for
+[−90°, 0°), 1 for [90°, 180°), …). cfx (0–7) = 4·(wrist centre behind axis 1)
++ 2·(wrist centre behind the lower arm, i.e. on the far side of the line through
+axes 2 and 3 from where it is at θ = 0) + (θ5 < 0).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.ik_analytic import wrist_centre
+from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
+from rapidfix.kinematics.model import as_joint_batch
+from rapidfix.kinematics.screws import product_of_exponentials
+
+if TYPE_CHECKING:
+    from rapidfix.kinematics.model import RobotModel
+
+QUADRANT = np.pi / 2
+CONF_TOL = 1e-9
+"""Angles (rad) and distances (mm) this close to a quadrant or side boundary match both sides."""
+
+
+def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """Signed quantities (..., 6) behind confdata: θ1, θ4, θ6 (rad), wrist centre ahead of
+    axis 1 (mm), wrist centre ahead of the lower arm line (mm), θ5 (rad)."""
+    q = np.asarray(q, dtype=float)
+    flat = q.reshape(-1, 6)
+    finite = np.all(np.isfinite(flat), axis=1)
+    safe = np.where(finite[:, None], flat, 0.0)
+    nominal = model.nominal
+    w, r = model.axis_dirs, model.axis_points
+    c0 = wrist_centre(nominal)
+    _, prefix = product_of_exponentials(w, r, model.home, safe)
+    R, t = prefix[:, 3, :3, :3], prefix[:, 3, :3, 3]  # e^{S1θ1} e^{S2θ2} e^{S3θ3}
+    c = np.einsum("nij,j->ni", R, c0) + t
+    # Ahead of axis 1: along the arm plane's forward direction, turned by θ1.
+    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
+    fwd0 /= np.linalg.norm(fwd0)
+    R1 = prefix[:, 1, :3, :3]
+    ahead1 = np.einsum("ni,ni->n", c - r[0], np.einsum("nij,j->ni", R1, fwd0))
+    # Ahead of the lower arm: side of the line axis 2 → axis 3 (in the arm plane).
+    a2 = np.einsum("nij,j->ni", prefix[:, 1, :3, :3], r[1]) + prefix[:, 1, :3, 3]
+    a3 = np.einsum("nij,j->ni", prefix[:, 2, :3, :3], r[2]) + prefix[:, 2, :3, 3]
+    w2 = np.einsum("nij,j->ni", prefix[:, 1, :3, :3], w[1])
+    arm = a3 - a2
+    arm_len = np.linalg.norm(arm, axis=1)
+    side = np.einsum("ni,ni->n", np.cross(arm, c - a2), w2) / arm_len
+    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+    side *= np.sign(side0) if side0 != 0 else 1.0
+    out = np.stack([safe[:, 0], safe[:, 3], safe[:, 5], ahead1, side, safe[:, 4]], axis=1)
+    out[~finite] = np.nan
+    return out.reshape((*q.shape[:-1], 6))
+
+
+def confdata(model: RobotModel, q: np.ndarray) -> np.ndarray:
+    """ABB confdata (N, 4) int [cf1, cf4, cf6, cfx] of joints q (N, 6) rad ((6,) gives (4,))."""
+    qb, single = as_joint_batch(q)
+    if not np.all(np.isfinite(qb)):
+        raise KinematicsError("joint values contain NaN or infinite values")
+    k = conf_quantities(model, qb)
+    quads = np.floor(k[:, :3] / QUADRANT).astype(int)
+    cfx = 4 * (k[:, 3] < 0) + 2 * (k[:, 4] < 0) + (k[:, 5] < 0)
+    out = np.concatenate([quads, cfx[:, None].astype(int)], axis=1)
+    return out[0] if single else out
+
+
+def conf_matches(
+    model: RobotModel, q: np.ndarray, conf: np.ndarray, tol: float = CONF_TOL
+) -> np.ndarray:
+    """(...,) mask: joints q (..., 6) have confdata `conf` (..., 4); boundaries match both."""
+    k = conf_quantities(model, q)
+    conf = np.asarray(conf)
+    with np.errstate(invalid="ignore"):
+        ok = np.ones(k.shape[:-1], dtype=bool)
+        for j in range(3):
+            lo = np.floor((k[..., j] - tol) / QUADRANT)
+            hi = np.floor((k[..., j] + tol) / QUADRANT)
+            ok &= (lo <= conf[..., j]) & (conf[..., j] <= hi)
+        cfx = conf[..., 3]
+        for bit, j in ((4, 3), (2, 4), (1, 5)):
+            wants_neg = (cfx & bit) != 0
+            value = k[..., j]
+            ok &= np.where(wants_neg, value < tol, value > -tol)
+    return ok & np.all(np.isfinite(k), axis=-1)
+
+
+def _pick(
+    sols: IKSolutions, chosen: np.ndarray, found: np.ndarray, miss: int
+) -> tuple[np.ndarray, np.ndarray]:
+    n = len(sols)
+    rows = np.arange(n)
+    q = np.where(found[:, None], sols.q[rows, chosen], np.nan)
+    status = np.where(found, IKStatus.OK, miss).astype(np.int8)
+    status[found & sols.singular[rows, chosen]] = IKStatus.WRIST_SINGULAR
+    failed = ~sols.valid.any(axis=1)
+    status[failed] = sols.status[failed]
+    return q, status
+
+
+def select_by_conf(
+    model: RobotModel, sols: IKSolutions, conf: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The valid solution whose confdata is `conf` (N, 4) or (4,): (q (N, 6), status (N,)).
+
+    Poses with no such solution get NaN joints and status NO_MATCHING_CONF (or the
+    pose's own status when it has no valid solution at all).
+    """
+    n = len(sols)
+    conf = np.asarray(conf, dtype=int)
+    if conf.shape not in ((4,), (n, 4)):
+        raise KinematicsError(f"confdata must have shape (4,) or ({n}, 4), got {conf.shape}")
+    conf = np.broadcast_to(conf, (n, 4))
+    match = sols.valid & conf_matches(model, sols.q, conf[:, None, :])
+    found = match.any(axis=1)
+    chosen = np.argmax(match, axis=1)
+    return _pick(sols, chosen, found, IKStatus.NO_MATCHING_CONF)
+
+
+def select_nearest(sols: IKSolutions, q_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The valid solution nearest q_prev (N, 6) or (6,) in joint space (Euclidean, rad)."""
+    n = len(sols)
+    qp, _ = as_joint_batch(q_prev)
+    qp = np.broadcast_to(qp, (n, 6))
+    with np.errstate(invalid="ignore"):
+        dist = np.sum((sols.q - qp[:, None, :]) ** 2, axis=2)
+    dist = np.where(sols.valid, dist, np.inf)
+    chosen = np.argmin(dist, axis=1)
+    found = sols.valid.any(axis=1)
+    return _pick(sols, chosen, found, IKStatus.UNREACHABLE)
+
+
+def nearest_chain(sols: IKSolutions, q_start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's rule for a sequence of targets: each solution nearest the one before.
+
+    The solutions are already computed for the whole batch; only this choice walks
+    the sequence, because each pick depends on the previous one. A target without
+    a solution keeps the chain at the last solved joints.
+    """
+    n = len(sols)
+    prev, _ = as_joint_batch(q_start)
+    prev = prev[0]
+    q = np.full((n, 6), np.nan)
+    status = np.array(sols.status, dtype=np.int8, copy=True)
+    for i in range(n):  # inherently sequential: one small vector operation per target
+        valid = sols.valid[i]
+        if not valid.any():
+            continue
+        dist = np.where(valid, np.sum((sols.q[i] - prev) ** 2, axis=1), np.inf)
+        k = int(np.argmin(dist))
+        q[i] = prev = sols.q[i, k]
+        status[i] = IKStatus.WRIST_SINGULAR if sols.singular[i, k] else IKStatus.OK
+    return q, status

@@ -1,0 +1,214 @@
+"""RobotModel: a six-axis arm as six revolute screws plus the tool0 home pose.
+
+The same class holds a nominal model (loaded from a robot file) and an "actual"
+model whose screws were perturbed by calibration (`with_screws`). Forward
+kinematics, joint frames and the Jacobian come from the screws alone; inverse
+kinematics is analytic for the nominal model and seeded Newton for an actual one.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.screws import product_of_exponentials, screw_rows
+
+if TYPE_CHECKING:
+    from rapidfix.kinematics.frames import Tool, WorkObject
+    from rapidfix.kinematics.ik_result import IKSolutions
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    out = np.array(a, dtype=float, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+def as_joint_batch(q: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(N, 6) float joints and whether the input was a single (6,) vector."""
+    arr = np.asarray(q, dtype=float)
+    single = arr.ndim == 1
+    arr = np.atleast_2d(arr)
+    if arr.ndim != 2 or arr.shape[1] != 6:
+        raise KinematicsError(f"joint values must have shape (N, 6) or (6,), got {arr.shape}")
+    return arr, single
+
+
+def as_pose_batch(T: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(N, 4, 4) float poses and whether the input was a single (4, 4) pose."""
+    arr = np.asarray(T, dtype=float)
+    single = arr.ndim == 2
+    if single:
+        arr = arr[None]
+    if arr.ndim != 3 or arr.shape[1:] != (4, 4):
+        raise KinematicsError(f"poses must have shape (N, 4, 4) or (4, 4), got {arr.shape}")
+    return arr, single
+
+
+class RobotModel:
+    """Six revolute screws (axis directions and points, mm) and tool0's home pose.
+
+    Attributes: `name`, `axis_dirs (6, 3)`, `axis_points (6, 3)` mm, `screws (6, 6)`
+    rows (w, v = -w × q), `home (4, 4)` tool0 at θ = 0, `limits (6, 2)` rad,
+    `source` (the robot file), `nominal` (the model the analytic IK is built on;
+    the model itself unless made by `with_screws`). Joint values are the
+    controller's: ABB's zero and sign conventions are built into the screws.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        axis_dirs: np.ndarray,
+        axis_points: np.ndarray,
+        home: np.ndarray,
+        limits: np.ndarray,
+        *,
+        source: str | Path | None = None,
+        nominal: RobotModel | None = None,
+    ) -> None:
+        dirs = np.asarray(axis_dirs, dtype=float)
+        if dirs.shape != (6, 3) or np.asarray(axis_points).shape != (6, 3):
+            raise KinematicsError("a robot model needs six axis directions and six axis points")
+        if np.asarray(home).shape != (4, 4) or np.asarray(limits).shape != (6, 2):
+            raise KinematicsError("a robot model needs a (4, 4) home pose and (6, 2) limits")
+        norms = np.linalg.norm(dirs, axis=1)
+        if np.any(norms < 1e-12):
+            raise KinematicsError("an axis direction is zero")
+        self.name = name
+        self.axis_dirs = _frozen(dirs / norms[:, None])
+        self.axis_points = _frozen(axis_points)
+        self.home = _frozen(home)
+        self.limits = _frozen(limits)
+        self.screws = _frozen(screw_rows(self.axis_dirs, self.axis_points))
+        self.source = None if source is None else str(source)
+        self.nominal = self if nominal is None else nominal
+        self._analytic = None
+
+    def __repr__(self) -> str:
+        kind = "nominal" if self.is_nominal else "actual"
+        return f"RobotModel({self.name!r}, {kind})"
+
+    @property
+    def is_nominal(self) -> bool:
+        """True for a model whose inverse kinematics is solved in closed form."""
+        return self.nominal is self
+
+    # ---- forward kinematics -------------------------------------------------------
+
+    def fk(
+        self,
+        q: np.ndarray,
+        tool: Tool | np.ndarray | None = None,
+        wobj: WorkObject | np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Pose (N, 4, 4) of tool0 in the base frame for joints q (N, 6) rad.
+
+        With `tool` (a frames.Tool or the TCP (4, 4) in the flange frame) and/or
+        `wobj` (a frames.WorkObject or (4, 4)) it returns the TCP pose in the
+        work-object frame instead. A (6,) input gives a (4, 4) result.
+        """
+        qb, single = as_joint_batch(q)
+        T, _ = product_of_exponentials(self.axis_dirs, self.axis_points, self.home, qb)
+        if tool is not None or wobj is not None:
+            from rapidfix.kinematics.frames import tcp_pose
+
+            T = tcp_pose(T, tool, wobj)
+        return T[0] if single else T
+
+    def joint_frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Current axis directions (N, 6, 3) and points on the axes (N, 6, 3) mm."""
+        qb, single = as_joint_batch(q)
+        _, prefix = product_of_exponentials(self.axis_dirs, self.axis_points, self.home, qb)
+        R, p = prefix[..., :3, :3], prefix[..., :3, 3]
+        dirs = np.einsum("nkij,kj->nki", R, self.axis_dirs)
+        points = np.einsum("nkij,kj->nki", R, self.axis_points) + p
+        return (dirs[0], points[0]) if single else (dirs, points)
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """Space Jacobian (N, 6, 6): column i is joint i's current screw (w; v = -w × q)."""
+        qb, single = as_joint_batch(q)
+        dirs, points = self.joint_frames(qb)
+        J = np.concatenate([dirs, -np.cross(dirs, points)], axis=-1).transpose(0, 2, 1)
+        return J[0] if single else J
+
+    # ---- models derived from this one ---------------------------------------------
+
+    def with_screws(
+        self,
+        axis_dirs: np.ndarray,
+        axis_points: np.ndarray,
+        home: np.ndarray | None = None,
+        name: str | None = None,
+    ) -> RobotModel:
+        """An actual (calibrated) model: other screws, same limits, IK seeded by this model."""
+        return RobotModel(
+            self.name if name is None else name,
+            axis_dirs,
+            axis_points,
+            self.home if home is None else home,
+            self.limits,
+            source=self.source,
+            nominal=self.nominal,
+        )
+
+    def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+        """Boolean (N,) (or (...)) mask: every joint inside its limits (± tol rad)."""
+        q = np.asarray(q, dtype=float)
+        lo, hi = self.limits[:, 0], self.limits[:, 1]
+        return np.all((q >= lo - tol) & (q <= hi + tol), axis=-1)
+
+    # ---- inverse kinematics -------------------------------------------------------
+
+    def ik(
+        self,
+        T: np.ndarray,
+        *,
+        tool: Tool | np.ndarray | None = None,
+        wobj: WorkObject | np.ndarray | None = None,
+        q_prev: np.ndarray | None = None,
+        wrist_tol: float | None = None,
+    ) -> IKSolutions:
+        """Every solution for tool0 poses T (N, 4, 4) in the base frame (see `kinematics.ik`).
+
+        With `tool` / `wobj` (frames.Tool / frames.WorkObject or (4, 4)), T is the TCP
+        pose in the work object. `q_prev` (N, 6) or (6,) gives θ4 at wrist singularities.
+        """
+        from rapidfix.kinematics.ik import WRIST_TOL, solve_all
+
+        return solve_all(
+            self,
+            T,
+            tool=tool,
+            wobj=wobj,
+            q_prev=q_prev,
+            wrist_tol=WRIST_TOL if wrist_tol is None else wrist_tol,
+        )
+
+    def ik_conf(
+        self, T: np.ndarray, conf: np.ndarray, **ik_options: object
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The solution each target's confdata [cf1, cf4, cf6, cfx] names: (q (N, 6), status).
+
+        `ik_options` are passed to `ik` (tool, wobj, q_prev, wrist_tol).
+        """
+        from rapidfix.kinematics.confdata import select_by_conf
+
+        return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
+
+    def ik_nearest(
+        self, T: np.ndarray, q_prev: np.ndarray, **ik_options: object
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The valid solution nearest q_prev (N, 6) or (6,): (q (N, 6), status (N,))."""
+        from rapidfix.kinematics.confdata import select_nearest
+
+        sols = self.ik(T, q_prev=q_prev, **ik_options)  # type: ignore[arg-type]
+        return select_nearest(sols, q_prev)
+
+    def confdata(self, q: np.ndarray) -> np.ndarray:
+        """ABB confdata [cf1, cf4, cf6, cfx] (N, 4) int of joints q (N, 6) rad."""
+        from rapidfix.kinematics.confdata import confdata
+
+        return confdata(self, q)

@@ -1,0 +1,1 @@
+"""Robot model files (TOML) shipped with rapidfix; one file per robot variant."""

@@ -1,0 +1,106 @@
+"""Screw-theory building blocks: exponentials of revolute twists and their products.
+
+A revolute joint is the unit screw S = (w, v) with v = -w x q for a point q on the
+axis. Its exponential e^[S]θ is a rotation by θ about that line. Everything here
+works on batches: angles of shape (N,) and axes broadcast against them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rotation_about(w: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) by angles θ (N,) about unit axes w (3,) or (N, 3).
+
+    Rodrigues' formula with sin θ and the versine 2 sin²(θ/2) evaluated directly,
+    so tiny angles keep full relative precision (1 - cos θ would round to zero).
+    """
+    theta = np.asarray(theta, dtype=float)
+    w = np.broadcast_to(np.asarray(w, dtype=float), (*theta.shape, 3))
+    s = np.sin(theta)
+    half = np.sin(0.5 * theta)
+    vers = 2.0 * half * half
+    x, y, z = w[..., 0], w[..., 1], w[..., 2]
+    out = np.empty((*theta.shape, 3, 3))
+    out[..., 0, 0] = 1.0 - vers * (y * y + z * z)
+    out[..., 1, 1] = 1.0 - vers * (x * x + z * z)
+    out[..., 2, 2] = 1.0 - vers * (x * x + y * y)
+    out[..., 0, 1] = vers * x * y - s * z
+    out[..., 1, 0] = vers * x * y + s * z
+    out[..., 0, 2] = vers * x * z + s * y
+    out[..., 2, 0] = vers * x * z - s * y
+    out[..., 1, 2] = vers * y * z - s * x
+    out[..., 2, 1] = vers * y * z + s * x
+    return out
+
+
+def revolute_exp(w: np.ndarray, q: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Homogeneous transforms (N, 4, 4) e^[S]θ of the revolute screw through q along w.
+
+    The translation is (I - R) q, the exact closed form for a pure rotation about
+    a line (equal to the general (Iθ + (1-cos θ)[w] + (θ - sin θ)[w]²) v term).
+    """
+    theta = np.asarray(theta, dtype=float)
+    rot = rotation_about(w, theta)
+    q = np.broadcast_to(np.asarray(q, dtype=float), (*theta.shape, 3))
+    out = np.zeros((*theta.shape, 4, 4))
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = q - np.einsum("...ij,...j->...i", rot, q)
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def screw_rows(axis_dirs: np.ndarray, axis_points: np.ndarray) -> np.ndarray:
+    """Screw coordinates (n, 6) as rows (w, v) with v = -w × q."""
+    w = np.asarray(axis_dirs, dtype=float)
+    q = np.asarray(axis_points, dtype=float)
+    return np.concatenate([w, -np.cross(w, q)], axis=-1)
+
+
+def invert_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of rigid transforms (..., 4, 4) using the transpose of the rotation."""
+    T = np.asarray(T, dtype=float)
+    rot_t = np.swapaxes(T[..., :3, :3], -1, -2)
+    out = np.zeros_like(T)
+    out[..., :3, :3] = rot_t
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", rot_t, T[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def product_of_exponentials(
+    axis_dirs: np.ndarray, axis_points: np.ndarray, home: np.ndarray, q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """PoE forward kinematics: (tool pose (N, 4, 4), prefix products (N, n, 4, 4)).
+
+    prefix[:, i] = e^[S1]θ1 … e^[Si]θi-1 is the transform that carries joint i's
+    home axis to where it is now (prefix[:, 0] is the identity).
+    """
+    q = np.asarray(q, dtype=float)
+    n = axis_dirs.shape[0]
+    prefix = np.empty((q.shape[0], n, 4, 4))
+    current = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
+    for i in range(n):  # loop over the six joints, not over poses
+        prefix[:, i] = current
+        current = current @ revolute_exp(axis_dirs[i], axis_points[i], q[:, i])
+    return current @ home, prefix
+
+
+def rotate_vectors(w: np.ndarray, theta: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors v (..., 3) turned by θ (...) about unit axes w: Rodrigues without matrices.
+
+    v + sin θ (w × v) + 2 sin²(θ/2) w × (w × v), exact for tiny angles too.
+    """
+    w = np.asarray(w, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    s = np.sin(theta)[..., None]
+    half = np.sin(0.5 * theta)[..., None]
+    wxv = _cross(w, v)
+    return v + s * wxv + (2.0 * half * half) * _cross(w, wxv)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
