@@ -1,0 +1,244 @@
+"""Evaluate constant RAPID expressions: literals, aggregates, arithmetic,
+references to constant data, record components and a few pure functions
+(Offs, RelTool, OrientZYX and maths).
+
+Anything that depends on the running controller raises NotConstant with the
+reason, which the program model reports for the target.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+from scipy.spatial.transform import Rotation
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.instructions import RUNTIME_FUNCTIONS
+from rapidfix.rapid.poses import offs, reltool
+from rapidfix.rapid.values import RECORD_FIELDS, Value, ValueShapeError
+
+TypedValue = tuple[Value, "str | None"]
+Lookup = Callable[[str], TypedValue]
+
+
+class NotConstant(Exception):
+    """The expression cannot be evaluated before run time; `reason` says why."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+
+
+def _is_num(value: Value) -> bool:
+    return isinstance(value, float)
+
+
+def _is_pos(value: Value) -> bool:
+    return isinstance(value, tuple) and len(value) == 3 and all(map(_is_num, value))
+
+
+class Evaluator:
+    """Evaluates expressions with `lookup(name) -> (value, type)` for data names."""
+
+    def __init__(self, lookup: Lookup,
+                 records: dict[str, tuple[tuple[str, str], ...]] | None = None) -> None:
+        self.lookup = lookup
+        self.records = dict(RECORD_FIELDS)
+        if records:
+            self.records.update(records)
+
+    def value(self, expr: s.Expr) -> Value:
+        """The value of `expr`; raises NotConstant."""
+        try:
+            return self.typed(expr)[0]
+        except RecursionError:
+            raise NotConstant("expression nested too deeply to evaluate") from None
+
+    def typed(self, expr: s.Expr) -> TypedValue:
+        """(value, type name or None) of `expr`; raises NotConstant."""
+        if isinstance(expr, s.NumericAggregate):
+            return expr.value, None
+        if isinstance(expr, s.Number):
+            return expr.value, "num"
+        if isinstance(expr, s.NameRef):
+            return self.lookup(expr.name)
+        if isinstance(expr, s.Aggregate):
+            return tuple(self.typed(item)[0] for item in expr.items), None
+        if isinstance(expr, s.String):
+            return expr.value, "string"
+        if isinstance(expr, s.Bool):
+            return expr.value, "bool"
+        if isinstance(expr, s.Paren):
+            return self.typed(expr.inner)
+        if isinstance(expr, s.Unary):
+            return self._unary(expr)
+        if isinstance(expr, s.Binary):
+            return self._binary(expr)
+        if isinstance(expr, s.Component):
+            return self._component(expr)
+        if isinstance(expr, s.Index):
+            return self._index(expr)
+        if isinstance(expr, s.Call):
+            return self._call(expr)
+        raise NotConstant(f"cannot evaluate {type(expr).__name__}")  # pragma: no cover
+
+    # ------------------------------------------------------------ operators
+    def _unary(self, expr: s.Unary) -> TypedValue:
+        value, kind = self.typed(expr.operand)
+        if expr.op == "NOT":
+            if isinstance(value, bool):
+                return not value, "bool"
+        elif _is_num(value):
+            return (-value if expr.op == "-" else value), "num"
+        elif _is_pos(value):
+            return (tuple(-v for v in value) if expr.op == "-" else value), kind
+        raise NotConstant(f"operator {expr.op} on this value is not evaluated")
+
+    def _binary(self, expr: s.Binary) -> TypedValue:
+        left, ltype = self.typed(expr.left)
+        right, rtype = self.typed(expr.right)
+        op = expr.op
+        if _is_num(left) and _is_num(right):
+            return _num_op(op, left, right)
+        if isinstance(left, bool) and isinstance(right, bool):
+            if op in ("AND", "OR", "XOR", "=", "<>"):
+                return {"AND": left and right, "OR": left or right, "XOR": left != right,
+                        "=": left == right, "<>": left != right}[op], "bool"
+        if isinstance(left, str) and isinstance(right, str):
+            if op == "+":
+                return left + right, "string"
+            if op in ("=", "<>"):
+                return (left == right) == (op == "="), "bool"
+        if _is_pos(left) and _is_pos(right) and op in ("+", "-"):
+            sign = 1.0 if op == "+" else -1.0
+            return tuple(a + sign * b for a, b in zip(left, right)), ltype or rtype or "pos"
+        if op == "*" and _is_num(left) and _is_pos(right):
+            return tuple(left * b for b in right), rtype or "pos"
+        if op in ("*", "/") and _is_pos(left) and _is_num(right):
+            if op == "/" and right == 0.0:
+                raise NotConstant("division by zero")
+            return tuple(a * right if op == "*" else a / right for a in left), ltype or "pos"
+        raise NotConstant(f"operator {op} on these values is not evaluated")
+
+    # ------------------------------------------------------------ data access
+    def _component(self, expr: s.Component) -> TypedValue:
+        value, kind = self.typed(expr.base)
+        fields = self.records.get(kind or "")
+        if fields is None or not isinstance(value, tuple) or len(value) != len(fields):
+            raise NotConstant(f"component .{expr.name} of a value of unknown type")
+        key = expr.name.lower()
+        for (name, field_type), item in zip(fields, value):
+            if name == key:
+                return item, field_type
+        raise NotConstant(f"type {kind} has no component {expr.name}")
+
+    def _index(self, expr: s.Index) -> TypedValue:
+        value, kind = self.typed(expr.base)
+        for index_expr in expr.indices:
+            index = self.value(index_expr)
+            if not _is_num(index) or index != int(index):
+                raise NotConstant("array index is not a whole number")
+            if not isinstance(value, tuple) or not 1 <= index <= len(value):
+                raise NotConstant(f"array index {int(index)} out of range")
+            value = value[int(index) - 1]
+        return value, kind
+
+    # ------------------------------------------------------------ functions
+    def _call(self, expr: s.Call) -> TypedValue:
+        key = expr.key
+        if key in RUNTIME_FUNCTIONS:
+            raise NotConstant(f"{expr.name} is read from the controller at run time")
+        handler = _FUNCTIONS.get(key)
+        if handler is None:
+            raise NotConstant(f"function {expr.name} is not evaluated before run time")
+        required = [self.value(a.value) for a in expr.args
+                    if a.kind == "required" and a.value is not None]
+        optional = {a.key: (self.value(a.value) if a.value is not None else True)
+                    for a in expr.args if a.kind == "optional"}
+        if any(a.kind == "conditional" for a in expr.args):
+            raise NotConstant("conditional argument is decided at run time")
+        try:
+            return handler(required, optional)
+        except (ValueShapeError, ValueError, TypeError, IndexError, KeyError,
+                ZeroDivisionError, OverflowError) as err:
+            raise NotConstant(f"{expr.name}: {err}") from None
+
+
+def _num_op(op: str, a: float, b: float) -> TypedValue:
+    if op == "+":
+        return a + b, "num"
+    if op == "-":
+        return a - b, "num"
+    if op == "*":
+        return a * b, "num"
+    if op in ("/", "DIV", "MOD"):
+        if b == 0.0:
+            raise NotConstant("division by zero")
+        if op == "/":
+            return a / b, "num"
+        quotient = float(math.trunc(a / b))
+        return (quotient if op == "DIV" else a - b * quotient), "num"
+    comparisons = {"=": a == b, "<>": a != b, "<": a < b, "<=": a <= b, ">": a > b,
+                   ">=": a >= b}
+    if op in comparisons:
+        return comparisons[op], "bool"
+    raise NotConstant(f"operator {op} on numbers")
+
+
+def _nums(args: list[Value], n: int) -> list[float]:
+    if len(args) != n or not all(map(_is_num, args)):
+        raise ValueError(f"expected {n} numeric arguments")
+    return args
+
+
+def _offs(req: list[Value], opt: dict) -> TypedValue:
+    if len(req) != 4:
+        raise ValueError("expected Offs(point, dx, dy, dz)")
+    return offs(req[0], *_nums(req[1:], 3)), "robtarget"
+
+
+def _reltool(req: list[Value], opt: dict) -> TypedValue:
+    if len(req) != 4:
+        raise ValueError("expected RelTool(point, dx, dy, dz [\\Rx] [\\Ry] [\\Rz])")
+    angles = [opt.get(k, 0.0) for k in ("rx", "ry", "rz")]
+    return reltool(req[0], *_nums(req[1:], 3), *_nums(angles, 3)), "robtarget"
+
+
+def _orient_zyx(req: list[Value], opt: dict) -> TypedValue:
+    ez, ey, ex = _nums(req, 3)
+    x, y, z, w = Rotation.from_euler("ZYX", [ez, ey, ex], degrees=True).as_quat()
+    q = (w, x, y, z) if w >= 0 else (-w, -x, -y, -z)
+    return tuple(float(v) for v in q), "orient"
+
+
+def _unary_math(fn: Callable[[float], float]) -> Callable[[list[Value], dict], TypedValue]:
+    def handler(req: list[Value], opt: dict) -> TypedValue:
+        (x,) = _nums(req, 1)
+        return float(fn(x)), "num"
+    return handler
+
+
+def _rounding(fn: Callable[[float], float]) -> Callable[[list[Value], dict], TypedValue]:
+    def handler(req: list[Value], opt: dict) -> TypedValue:
+        (x,) = _nums(req, 1)
+        dec = opt.get("dec", 0.0)
+        scale = 10.0 ** dec
+        return float(fn(x * scale)) / scale, "num"
+    return handler
+
+
+_FUNCTIONS: dict[str, Callable[[list[Value], dict], TypedValue]] = {
+    "offs": _offs,
+    "reltool": _reltool,
+    "orientzyx": _orient_zyx,
+    "abs": _unary_math(abs),
+    "sqrt": _unary_math(math.sqrt),
+    "sin": _unary_math(lambda d: math.sin(math.radians(d))),
+    "cos": _unary_math(lambda d: math.cos(math.radians(d))),
+    "tan": _unary_math(lambda d: math.tan(math.radians(d))),
+    "atan2": lambda req, opt: (math.degrees(math.atan2(*_nums(req, 2))), "num"),
+    "pow": lambda req, opt: (float(math.pow(*_nums(req, 2))), "num"),
+    "round": _rounding(lambda v: math.floor(v + 0.5) if v >= 0 else -math.floor(-v + 0.5)),
+    "trunc": _rounding(math.trunc),
+}

@@ -1,0 +1,60 @@
+"""Entry points: RAPID text or bytes in, Program model out."""
+
+from __future__ import annotations
+
+import gc
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from lark.exceptions import UnexpectedInput
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.grammar import rapid_parser
+from rapidfix.rapid.model_builder import build_program
+from rapidfix.rapid.program import Program
+from rapidfix.rapid.source import SourceText, decode_source
+from rapidfix.rapid.syntax_errors import explain
+
+
+@contextmanager
+def _cyclic_gc_paused() -> Iterator[None]:
+    """Pause Python's cyclic garbage collector while a large tree is built.
+
+    Parsing allocates millions of small acyclic objects; every generation-2
+    collection would walk all of them again, which makes parsing of large CAM
+    programs far slower. Reference counting still frees everything as usual.
+    """
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def parse_source(source: SourceText) -> s.SourceFile:
+    """The syntax tree of decoded source; raises RapidSyntaxError."""
+    try:
+        return rapid_parser().parse(source.text)
+    except UnexpectedInput as err:
+        raise explain(source, err) from None
+
+
+def parse_program(source: str | bytes, filename: str = "<string>") -> Program:
+    """Parse RAPID text or file bytes into a Program; raises RapidSyntaxError.
+
+    Bytes are decoded as described in rapidfix.rapid.source; the Program can
+    write them back unchanged.
+    """
+    decoded = decode_source(source, filename)
+    original = source if isinstance(source, bytes) else decoded.encode()
+    with _cyclic_gc_paused():
+        return build_program(decoded, original, parse_source(decoded))
+
+
+def load_program(path: str | Path) -> Program:
+    """Read and parse a RAPID file (.mod, .modx, .prg, .sys)."""
+    file = Path(path)
+    return parse_program(file.read_bytes(), str(path))

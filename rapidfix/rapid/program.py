@@ -1,0 +1,236 @@
+"""The program model: what the post-processor needs from a RAPID file.
+
+Declarations with their evaluated values, routines, and every motion
+instruction with its targets, speed, zone, tool, work object and optional
+arguments — each with the span it came from, so that rapidfix.rapid.edit can
+rewrite exactly that text. Built by rapidfix.rapid.model_builder.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.instructions import MotionSpec
+from rapidfix.rapid.source import SourceText
+from rapidfix.rapid.span import Span
+from rapidfix.rapid.values import TARGET_TYPES, Value, ValueShapeError, typed_value
+
+
+@dataclass(eq=False)
+class Declaration:
+    """A data declaration (`CONST robtarget p10 := [...];`), module or routine level.
+
+    `value` is the evaluated initial value (None when there is none or it
+    cannot be evaluated); `static` says whether that value holds for the whole
+    run, and `reason` why not.
+    """
+
+    name: str
+    type_name: str
+    storage: str  # 'CONST' | 'VAR' | 'PERS'
+    module: str
+    routine: str | None
+    span: Span  # whole declaration, up to and including ';'
+    name_span: Span
+    value_span: Span | None  # the initial value expression
+    syntax: s.DataDecl = field(repr=False)
+    local: bool = False
+    task: bool = False
+    dims: tuple[int, ...] = ()
+    value: Value | None = None
+    static: bool = False
+    reason: str | None = None
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+    @property
+    def type_key(self) -> str:
+        return self.type_name.lower()
+
+    @property
+    def is_target(self) -> bool:
+        """A robtarget or jointtarget (scalar or array)."""
+        return self.type_key in TARGET_TYPES
+
+    @property
+    def data(self) -> Any:
+        """Typed view of the value (RobTarget, ToolData, ...) or None."""
+        if self.value is None or self.dims:
+            return None
+        try:
+            return typed_value(self.type_name, self.value)
+        except ValueShapeError:
+            return None
+
+
+@dataclass(eq=False)
+class Operand:
+    """One argument of an instruction, with its value when it is known.
+
+    `form`: 'name' (a plain data name), 'inline' (an aggregate), 'offs',
+    'reltool', 'expression', or 'switch' (an optional argument with no value).
+    """
+
+    argument: s.Argument = field(repr=False)
+    span: Span  # the whole argument, including `\Name:=` for optional ones
+    value_span: Span | None  # the expression only
+    text: str  # source text of the expression
+    form: str
+    name: str | None = None  # the data name for form 'name' (and Offs/RelTool base)
+    type_name: str | None = None
+    value: Value | None = None
+    static: bool = False
+    reason: str | None = None
+    declaration: Declaration | None = field(default=None, repr=False)
+
+    @property
+    def data(self) -> Any:
+        """Typed view of the value when its type is known, else None."""
+        if self.value is None or self.type_name is None:
+            return None
+        try:
+            return typed_value(self.type_name, self.value)
+        except ValueShapeError:
+            return None
+
+
+@dataclass(eq=False)
+class MotionInstruction:
+    """A call of a motion instruction (MoveL, MoveAbsJ, TriggC, ...)."""
+
+    name: str
+    spec: MotionSpec = field(repr=False)
+    module: str
+    routine: str
+    span: Span  # whole statement including ';'
+    name_span: Span
+    syntax: s.ProcedureCall = field(repr=False)
+    arguments: dict[str, Operand]  # required parameters by lower-case spec name
+    optional: dict[str, Operand]  # optional arguments by lower-case name
+    in_loop: bool = False
+
+    @property
+    def targets(self) -> list[Operand]:
+        """Target operands in order (CirPoint before ToPoint)."""
+        return [self.arguments[p.lower()] for p in self.spec.target_parameters
+                if p.lower() in self.arguments]
+
+    @property
+    def target(self) -> Operand | None:
+        """The destination (ToPoint / ToJointPos)."""
+        targets = self.targets
+        return targets[-1] if targets else None
+
+    @property
+    def target_kind(self) -> str:
+        return self.spec.target_kind
+
+    @property
+    def speed(self) -> Operand | None:
+        return self.arguments.get("speed")
+
+    @property
+    def zone(self) -> Operand | None:
+        return self.arguments.get("zone")
+
+    @property
+    def tool(self) -> Operand | None:
+        return self.arguments.get("tool")
+
+    @property
+    def wobj(self) -> Operand | None:
+        return self.optional.get("wobj")
+
+
+@dataclass(eq=False)
+class RoutineInfo:
+    name: str
+    kind: str  # 'PROC' | 'FUNC' | 'TRAP'
+    module: str
+    span: Span
+    syntax: s.Routine = field(repr=False)
+
+    @property
+    def parameters(self) -> list[s.Parameter]:
+        return self.syntax.parameters
+
+
+@dataclass(eq=False)
+class ModuleInfo:
+    """A module; `declarations_end` is where new module data can be inserted
+    (just after the last module-level declaration, or after the MODULE line)."""
+
+    name: str
+    attributes: list[str]
+    span: Span
+    header_end: int
+    declarations_end: int
+    syntax: s.Module = field(repr=False)
+
+
+@dataclass(eq=False)
+class Program:
+    """A parsed RAPID file: its source, syntax tree and model."""
+
+    source: SourceText = field(repr=False)
+    original: bytes = field(repr=False)
+    syntax: s.SourceFile = field(repr=False)
+    modules: list[ModuleInfo] = field(default_factory=list)
+    declarations: list[Declaration] = field(default_factory=list)
+    routines: list[RoutineInfo] = field(default_factory=list)
+    motions: list[MotionInstruction] = field(default_factory=list)
+    _by_name: dict[str, list[Declaration]] | None = field(default=None, repr=False)
+    _indexed: int = field(default=0, repr=False)
+
+    @property
+    def filename(self) -> str:
+        return self.source.filename
+
+    @property
+    def text(self) -> str:
+        return self.source.text
+
+    @property
+    def encoding(self) -> str:
+        return self.source.encoding
+
+    @property
+    def bom(self) -> bytes:
+        return self.source.bom
+
+    @property
+    def newline(self) -> str:
+        """The file's dominant line ending ('\\n' or '\\r\\n')."""
+        return self.source.newline
+
+    @property
+    def header(self) -> str | None:
+        """The `%%% ... %%%` block of a .prg file, or None."""
+        return self.syntax.header
+
+    def span(self, start: int, end: int) -> Span:
+        """A span of this program's text."""
+        return Span(start, end, self.source)
+
+    def declaration(self, name: str, routine: str | None = None) -> Declaration | None:
+        """The declaration `name` visible in `routine` (or at module level), any case."""
+        if self._by_name is None or self._indexed != len(self.declarations):
+            index: dict[str, list[Declaration]] = {}
+            for decl in self.declarations:
+                index.setdefault(decl.key, []).append(decl)
+            self._by_name, self._indexed = index, len(self.declarations)
+        candidates = self._by_name.get(name.lower(), [])
+        if routine is not None:
+            routine_key = routine.lower()
+            for decl in candidates:
+                if decl.routine is not None and decl.routine.lower() == routine_key:
+                    return decl
+        return next((d for d in candidates if d.routine is None), None)
+
+    def to_bytes(self) -> bytes:
+        """The file exactly as it was read."""
+        return self.original

@@ -1,0 +1,392 @@
+"""The syntax tree of a RAPID file: small nodes that know their source offsets.
+
+Every node carries `start` and `end`, character offsets into the decoded text
+(end exclusive); line and column are computed from them only when asked (see
+rapidfix.rapid.span). Names keep their original spelling; `.key` is the
+case-folded form RAPID compares by.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+
+@dataclass(slots=True, eq=False)
+class Node:
+    """Anything with a place in the source."""
+
+    start: int
+    end: int
+
+
+# ---------------------------------------------------------------- expressions
+@dataclass(slots=True, eq=False)
+class Number(Node):
+    value: float
+    text: str
+
+
+@dataclass(slots=True, eq=False)
+class String(Node):
+    value: str
+
+
+@dataclass(slots=True, eq=False)
+class Bool(Node):
+    value: bool
+
+
+@dataclass(slots=True, eq=False)
+class NumericAggregate(Node):
+    """An aggregate of numbers only (`[[1,2,3],[1,0,0,0],...]`), read in bulk."""
+
+    value: tuple
+
+
+@dataclass(slots=True, eq=False)
+class Aggregate(Node):
+    items: list[Expr]
+
+
+@dataclass(slots=True, eq=False)
+class NameRef(Node):
+    name: str
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(slots=True, eq=False)
+class Index(Node):
+    base: Expr
+    indices: list[Expr]
+
+
+@dataclass(slots=True, eq=False)
+class Component(Node):
+    base: Expr
+    name: str
+
+
+@dataclass(slots=True, eq=False)
+class Call(Node):
+    """A function call `Name(args)`."""
+
+    name: str
+    args: list[Argument]
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(slots=True, eq=False)
+class Unary(Node):
+    op: str  # '-', '+', 'NOT'
+    operand: Expr
+
+
+@dataclass(slots=True, eq=False)
+class Binary(Node):
+    op: str  # upper case: '+', 'DIV', 'AND', '<>', ...
+    left: Expr
+    right: Expr
+
+
+@dataclass(slots=True, eq=False)
+class Paren(Node):
+    inner: Expr
+
+
+Expr = (
+    Number | String | Bool | NumericAggregate | Aggregate | NameRef | Index | Component
+    | Call | Unary | Binary | Paren
+)
+
+
+@dataclass(slots=True, eq=False)
+class Argument(Node):
+    """One argument of a call: required (`expr` or `Name:=expr`), optional
+    (`\\Name`, `\\Name:=expr`) or conditional (`\\Name?Param`)."""
+
+    kind: str  # 'required' | 'optional' | 'conditional'
+    name: str | None
+    value: Expr | None
+    condition: str | None = None  # the parameter named after '?'
+
+    @property
+    def key(self) -> str | None:
+        return None if self.name is None else self.name.lower()
+
+
+# ---------------------------------------------------------------- statements
+@dataclass(slots=True, eq=False)
+class Statement(Node):
+    """Base of every statement."""
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        """The statement lists nested in this statement (none for simple ones)."""
+        return iter(())
+
+
+@dataclass(slots=True, eq=False)
+class ProcedureCall(Statement):
+    name: str
+    args: list[Argument]
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(slots=True, eq=False)
+class LateCall(Statement):
+    """`%expr% args;` — a procedure chosen at run time."""
+
+    target: Expr
+    args: list[Argument]
+
+
+@dataclass(slots=True, eq=False)
+class Assignment(Statement):
+    target: Expr
+    value: Expr
+
+
+@dataclass(slots=True, eq=False)
+class If(Statement):
+    branches: list[tuple[Expr, list[Statement]]]
+    otherwise: list[Statement] | None
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        for _cond, body in self.branches:
+            yield body
+        if self.otherwise is not None:
+            yield self.otherwise
+
+
+@dataclass(slots=True, eq=False)
+class CompactIf(Statement):
+    condition: Expr
+    statement: Statement
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        yield [self.statement]
+
+
+@dataclass(slots=True, eq=False)
+class For(Statement):
+    variable: str
+    first: Expr
+    last: Expr
+    step: Expr | None
+    body: list[Statement]
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        yield self.body
+
+
+@dataclass(slots=True, eq=False)
+class While(Statement):
+    condition: Expr
+    body: list[Statement]
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        yield self.body
+
+
+@dataclass(slots=True, eq=False)
+class Test(Statement):
+    subject: Expr
+    cases: list[tuple[list[Expr], list[Statement]]]
+    default: list[Statement] | None
+
+    def bodies(self) -> Iterator[list[Statement]]:
+        for _values, body in self.cases:
+            yield body
+        if self.default is not None:
+            yield self.default
+
+
+@dataclass(slots=True, eq=False)
+class Label(Statement):
+    name: str
+
+
+@dataclass(slots=True, eq=False)
+class Goto(Statement):
+    label: str
+
+
+@dataclass(slots=True, eq=False)
+class Return(Statement):
+    value: Expr | None
+
+
+@dataclass(slots=True, eq=False)
+class Raise(Statement):
+    value: Expr | None
+
+
+@dataclass(slots=True, eq=False)
+class Exit(Statement):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class Retry(Statement):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class TryNext(Statement):
+    pass
+
+
+@dataclass(slots=True, eq=False)
+class Connect(Statement):
+    target: Expr
+    trap: str
+
+
+# ---------------------------------------------------------------- declarations
+@dataclass(slots=True, eq=False)
+class DataDecl(Node):
+    """`[LOCAL] [TASK] VAR|PERS|CONST type name [{dims}] [:= init];`"""
+
+    storage: str  # 'VAR' | 'PERS' | 'CONST'
+    type_name: str
+    name: str
+    name_start: int
+    dims: list[Expr]
+    init: Expr | None
+    local: bool = False
+    task: bool = False
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+    @property
+    def type_key(self) -> str:
+        return self.type_name.lower()
+
+
+@dataclass(slots=True, eq=False)
+class RecordField(Node):
+    type_name: str
+    name: str
+    dims: list[Expr]
+
+
+@dataclass(slots=True, eq=False)
+class RecordDecl(Node):
+    name: str
+    fields: list[RecordField]
+    local: bool = False
+
+
+@dataclass(slots=True, eq=False)
+class AliasDecl(Node):
+    type_name: str
+    name: str
+    local: bool = False
+
+
+@dataclass(slots=True, eq=False)
+class Parameter(Node):
+    """A routine parameter; optional ones (`\\`) may belong to a group of
+    mutually exclusive alternatives (`\\a | b`)."""
+
+    access: str | None  # None, 'VAR', 'PERS', 'INOUT'
+    type_name: str
+    name: str
+    array_rank: int = 0
+    optional: bool = False
+    alternatives: tuple[str, ...] = ()
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(slots=True, eq=False)
+class Handler(Node):
+    kind: str  # 'BACKWARD' | 'ERROR' | 'UNDO'
+    numbers: list[Expr]
+    body: list[Statement]
+
+
+@dataclass(slots=True, eq=False)
+class Routine(Node):
+    kind: str  # 'PROC' | 'FUNC' | 'TRAP'
+    name: str
+    parameters: list[Parameter]
+    data: list[DataDecl]
+    body: list[Statement]
+    handlers: list[Handler]
+    return_type: str | None = None
+    local: bool = False
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
+ModuleItem = DataDecl | RecordDecl | AliasDecl | Routine
+
+
+@dataclass(slots=True, eq=False)
+class Module(Node):
+    name: str
+    attributes: list[str]
+    items: list[ModuleItem]
+    header_end: int  # offset just past the MODULE line's name / attribute list
+
+
+@dataclass(slots=True, eq=False)
+class SourceFile(Node):
+    header: str | None
+    modules: list[Module] = field(default_factory=list)
+
+
+def walk_statements(body: list[Statement], depth: int = 0) -> Iterator[tuple[Statement, int]]:
+    """Every statement in `body` and nested in it, with its loop depth (FOR/WHILE)."""
+    stack: list[tuple[list[Statement], int, int]] = [(body, 0, depth)]
+    while stack:
+        statements, index, loops = stack.pop()
+        if index >= len(statements):
+            continue
+        statement = statements[index]
+        stack.append((statements, index + 1, loops))
+        yield statement, loops
+        inner = loops + 1 if isinstance(statement, (For, While)) else loops
+        for nested in reversed(list(statement.bodies())):
+            stack.append((nested, 0, inner))
+
+
+def walk_expression(expr: Expr | None) -> Iterator[Expr]:
+    """`expr` and every expression inside it (arguments of calls included)."""
+    stack: list[Expr | None] = [expr]
+    while stack:
+        node = stack.pop()
+        if node is None:
+            continue
+        yield node
+        if isinstance(node, (Binary,)):
+            stack.extend((node.right, node.left))
+        elif isinstance(node, (Unary,)):
+            stack.append(node.operand)
+        elif isinstance(node, Paren):
+            stack.append(node.inner)
+        elif isinstance(node, Aggregate):
+            stack.extend(reversed(node.items))
+        elif isinstance(node, Index):
+            stack.extend(reversed(node.indices))
+            stack.append(node.base)
+        elif isinstance(node, Component):
+            stack.append(node.base)
+        elif isinstance(node, Call):
+            stack.extend(arg.value for arg in reversed(node.args))

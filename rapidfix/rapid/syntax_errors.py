@@ -1,0 +1,155 @@
+"""Turn Lark's parse errors into one readable RapidSyntaxError.
+
+`file:line:col: unexpected 'X'; expected one of ...`, with terminal names in
+words a RAPID programmer knows, plus clear messages for RobotStudio's
+placeholders (`<SMT>`, `<EXP>`, ...) and for text after the last ENDMODULE.
+"""
+
+from __future__ import annotations
+
+import re
+
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid.grammar import diagnosis_parser, terminal_patterns
+from rapidfix.rapid.source import SourceText
+
+_WORDS = {
+    "NAME": "a name",
+    "NUMBER": "a number",
+    "STRING": "a string",
+    "NUMERIC_AGGREGATE": None,  # always offered together with '['
+    "PRG_HEADER": "a %%% header",
+    "$END": "end of file",
+}
+_MAX_EXPECTED = 10
+
+# Groups of terminals said in one phrase when all (or most) of them are expected.
+_GROUPS: tuple[tuple[str, frozenset[str], int], ...] = (
+    ("a statement", frozenset({"NAME", "IF", "FOR", "WHILE", "TEST", "GOTO", "RETURN", "RAISE",
+                               "EXIT", "RETRY", "TRYNEXT", "CONNECT", "PERCENT"}), 10),
+    ("a declaration", frozenset({"VAR", "PERS", "CONST", "LOCAL", "TASK"}), 3),
+    ("an operator", frozenset({"AND", "OR", "XOR", "DIV", "MOD", "PLUS", "MINUS", "STAR",
+                               "SLASH", "EQ", "NE", "LT", "LE", "GT", "GE"}), 8),
+)
+
+# Strings and comments are skipped so that '<SMT>' inside them is left alone.
+_PLACEHOLDER_SCAN = re.compile(r'"(?:[^"\r\n]|"")*"|![^\n]*|<[A-Z]{2,8}>')
+
+
+def describe_terminal(name: str) -> str | None:
+    """A terminal name in words: 'NAME' -> 'a name', 'SEMI' -> "';'"."""
+    if name in _WORDS:
+        return _WORDS[name]
+    literal = terminal_patterns().get(name)
+    if literal is not None:
+        return f"'{literal.upper()}'" if literal.isalpha() else f"'{literal}'"
+    return name.lower()
+
+
+def describe_expected(names: set[str] | frozenset[str]) -> str:
+    """'expected one of ...' from a set of terminal names (grouped, sorted, shortened)."""
+    remaining = set(names)
+    phrases = []
+    for phrase, group, enough in _GROUPS:
+        if len(remaining & group) >= enough:
+            phrases.append(phrase)
+            remaining -= group
+    words = phrases + sorted({w for w in (describe_terminal(n) for n in remaining) if w})
+    if not words:
+        return ""
+    if len(words) == 1:
+        return f"expected {words[0]}"
+    shown = words[:_MAX_EXPECTED]
+    more = f", ... ({len(words) - _MAX_EXPECTED} more)" if len(words) > _MAX_EXPECTED else ""
+    return "expected one of " + ", ".join(shown) + more
+
+
+def find_placeholder(source: SourceText, before: int) -> tuple[int, str] | None:
+    """The first RobotStudio placeholder such as <SMT> at or before offset `before`."""
+    text = source.text
+    limit = source.line_end(min(before, len(text)))
+    for match in _PLACEHOLDER_SCAN.finditer(text, 0, limit):
+        token = match.group(0)
+        if token.startswith("<"):
+            return match.start(), token
+    return None
+
+
+def _after_module(text: str) -> bool:
+    """Whether `text` (everything before the error) ends a module."""
+    return re.search(r"\bENDMODULE\b", text, re.IGNORECASE) is not None
+
+
+def _snippet(text: str, offset: int) -> str:
+    """The offending text at `offset`: one word or one character."""
+    match = re.compile(r"[A-Za-z0-9_.]+|\S").match(text, offset)
+    return match.group(0) if match else text[offset:offset + 1]
+
+
+def _accepted(err: UnexpectedInput) -> set[str] | None:
+    """Exactly the terminals the parser would have taken at the error, if Lark can say."""
+    interactive = getattr(err, "interactive_parser", None)
+    if interactive is None:
+        return None
+    try:
+        return set(interactive.accepts())
+    except UnexpectedInput:  # pragma: no cover - accepts() handles its own trials
+        return None
+
+
+def explain(source: SourceText, fallback: UnexpectedInput) -> RapidSyntaxError:
+    """Re-parse `source` with the plain parser to name what was expected exactly."""
+    try:
+        diagnosis_parser().parse(source.text)
+    except UnexpectedInput as err:
+        return translate(err, source, _accepted(err))
+    return translate(fallback, source)  # pragma: no cover - both parsers share a grammar
+
+
+def translate(err: UnexpectedInput, source: SourceText,
+              accepted: set[str] | None = None) -> RapidSyntaxError:
+    """The RapidSyntaxError for a Lark parse error in `source`."""
+    text = source.text
+    if isinstance(err, UnexpectedToken) and err.token.type != "$END":
+        offset = err.token.start_pos
+        found = str(err.token)
+        expected = set(err.expected)
+    elif isinstance(err, UnexpectedCharacters):
+        offset = err.pos_in_stream
+        found = _snippet(text, offset)
+        expected = set(err.allowed or ())
+    else:
+        offset = len(text)
+        found = ""
+        expected = set(getattr(err, "expected", ()) or ())
+    if accepted:
+        expected = accepted
+    placeholder = find_placeholder(source, offset)
+    if placeholder is not None:
+        where, token = placeholder
+        line, column = source.line_column(where)
+        return RapidSyntaxError(
+            f"unfinished code: RobotStudio placeholder {token} must be replaced",
+            file=source.filename, line=line, column=column,
+        )
+    line, column = source.line_column(offset)
+    if isinstance(err, UnexpectedEOF) or (isinstance(err, UnexpectedToken)
+                                          and err.token.type == "$END"):
+        message = "unexpected end of file"
+    else:
+        shown = found if len(found) <= 40 else found[:37] + "..."
+        message = f"unexpected {shown!r}"
+        if isinstance(err, UnexpectedCharacters) and found == '"':
+            expected = set()
+            message = "unterminated string (a string ends on the line where it starts)"
+        if expected and expected <= {"MODULE", "PRG_HEADER", "$END"}:
+            if _after_module(text[:offset]):
+                message = f"text after the last ENDMODULE: {shown!r}"
+            else:
+                message = f"unexpected {shown!r}: a RAPID file starts with MODULE"
+    wanted = describe_expected(expected)
+    if wanted:
+        message += f"; {wanted}"
+    return RapidSyntaxError(message, file=source.filename, line=line, column=column)
