@@ -1,0 +1,89 @@
+"""`rapidfix fit`: a per-joint error model from laser-tracker sweeps."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rapidfix.exceptions import OutputExistsError
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `fit` command."""
+    parser = subparsers.add_parser(
+        "fit",
+        help="fit a joint motion error model from joint sweeps",
+        description="Register the tracker, recover every joint's actual angle from the "
+        "sweeps, fit one cross-validated Gaussian RBF network per joint and write the "
+        "model file (JSON). Prints per joint the valid range, the cross-validated RMS "
+        "and the repeatability.",
+    )
+    parser.add_argument("setup", metavar="SETUP", help="setup.toml of the measurement set")
+    parser.add_argument("sweeps", metavar="SWEEPS", nargs="+", help="sweeps CSV file(s)")
+    parser.add_argument("-o", "--output", required=True, metavar="MODEL.json",
+                        help="model file to write")
+    parser.add_argument("--robot", metavar="NAME",
+                        help="robot model name or robot file (default: the setup's robot)")
+    parser.add_argument("--outside-range", choices=("clamp", "refuse"), default="clamp",
+                        help="what the model does with a joint angle outside the measured "
+                        "range: clamp to the edge with a warning (default) or refuse")
+    parser.add_argument("--validation", metavar="POINTS.csv",
+                        help="measured points not used in the fit: print the error before "
+                        "and the residual the model predicts after compensation")
+    parser.add_argument("--report", metavar="DIR",
+                        help="also write report.html and report.json (fit statistics, "
+                        "the Δθ-θ figure per joint, the validation numbers) into DIR")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit, save, print the summary; exit status 3 if the model warned."""
+    from rapidfix.pipeline import model_warnings
+
+    with model_warnings() as messages:
+        _fit(args)
+    for text in messages:
+        print(f"rapidfix: warning: {text}", file=sys.stderr)
+    return 3 if messages else 0
+
+
+def _fit(args: argparse.Namespace) -> None:
+    """The work of `run`."""
+    from rapidfix import pipeline
+    from rapidfix.errors.model_file import save_model
+    from rapidfix.report.accuracy import validation_section
+    from rapidfix.report.document import write_report
+
+    output = Path(args.output)
+    inputs = [Path(args.setup), *map(Path, args.sweeps)]
+    if any(output.exists() and output.resolve() == p.resolve() for p in inputs if p.exists()):
+        raise OutputExistsError("the model file would overwrite an input", file=output)
+    outcome = pipeline.fit_from_files(args.setup, args.sweeps, robot=args.robot,
+                             policy=args.outside_range)
+    save_model(outcome.model, output)
+    print(outcome.model.summary())
+    print(pipeline.fit_summary(outcome.model))
+    reg = outcome.model.statistics.get("sweep_analysis", {}).get("registration", {})
+    if isinstance(reg, dict) and reg.get("rms_mm") is not None:
+        print(f"tracker registration: RMS {reg['rms_mm']:.4f} mm")
+        outliers = reg.get("outlier_rows") or []
+        if outliers:
+            print(f"outlier rows left out ({len(outliers)}): "
+                  f"{', '.join(str(r) for r in outliers[:20])}{' …' if len(outliers) > 20 else ''}")
+    validation = None
+    if args.validation:
+        validation = pipeline.predicted_before_after(outcome, args.validation)
+    if args.report:
+        report = pipeline.accuracy_report_for(
+            outcome, validation=validation, title=f"rapidfix fit: {output.name}",
+            notes=["Validation 'after' is predicted, not executed: the measured position "
+                   "minus the model's prediction, i.e. what compensation would leave."]
+            if validation is not None else [])
+        html_path, json_path = write_report(report, args.report)
+        print(f"wrote {html_path} and {json_path}")
+    if validation is not None:
+        _, numbers = validation_section(validation)
+        print(pipeline.before_after_table({"validation": numbers}, after_label="after*"))
+        print("* predicted: measured minus model prediction, what compensation would leave")
+    print(f"wrote {output}")

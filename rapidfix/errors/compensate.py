@@ -1,0 +1,174 @@
+"""Compensation: the joints to command so that the real robot reaches the ideal pose.
+
+Per-joint models (every effect separable, no geometry change): each joint solves
+θc + Δθ(θc) = θ_ideal on its own by Newton's method with the analytic derivative
+(a fixed-point step where 1 + Δθ' is too small), vectorised over all poses.
+
+Any other model: the general solve finds θc with actual_tcp(θc) = T_target, the
+pose the nominal robot reaches at θ_ideal, by damped least squares (Newton) on the
+full forward model, seeded by θ_ideal − Δθ(θ_ideal). New effects are compensated
+by this solve without new code. Tolerance: 1e-9° on every joint step.
+
+Poses that do not converge are reported per pose (`CompensationResult.converged`);
+their last iterate is returned, never NaN. `compensate()` raises ModelError
+listing them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from rapidfix.errors.context import EMPTY, Context
+from rapidfix.errors.model import ErrorModel
+from rapidfix.exceptions import ModelError
+
+TOL_DEG = 1e-9
+_MAX_ITER = 60
+#: rows of the pose error in mm are divided by this to balance them against radians
+_LENGTH_SCALE_MM = 1000.0
+_DAMPING = 1e-14
+
+
+@dataclass(frozen=True)
+class CompensationResult:
+    """The solve's answer and how well each pose was solved.
+
+    q_cmd (N, 6) rad; converged (N,) bool; last_step_deg (N,): per pose the largest
+    joint residual of θc + Δθ(θc) − θ_ideal (per-joint solve) or the largest joint
+    step of the last Newton iteration (general solve), degrees; method
+    ("per-joint" or "general"); iterations used.
+    """
+
+    q_cmd: np.ndarray
+    converged: np.ndarray
+    last_step_deg: np.ndarray
+    method: str
+    iterations: int
+
+    @property
+    def failed_rows(self) -> np.ndarray:
+        """Indices of poses that did not converge."""
+        return np.flatnonzero(~self.converged)
+
+
+def _ideal(q_ideal: np.ndarray) -> np.ndarray:
+    q = np.atleast_2d(np.asarray(q_ideal, dtype=float))
+    if q.ndim != 2 or q.shape[1] != 6:
+        raise ModelError(f"ideal joints must have shape (N, 6), got {q.shape}")
+    bad = np.flatnonzero(~np.isfinite(q).all(axis=1))
+    if bad.size:
+        raise ModelError(f"ideal joints are not finite in rows {bad[:10].tolist()}")
+    return q
+
+
+def solve_per_joint(
+    model: ErrorModel,
+    q_ideal: np.ndarray,
+    ctx: Context | None = None,
+    *,
+    tol_deg: float = TOL_DEG,
+    max_iter: int = _MAX_ITER,
+) -> CompensationResult:
+    """Solve θc + Δθ(θc) = θ_ideal joint by joint (Newton, fixed-point fallback)."""
+    target = _ideal(q_ideal)
+    ctx = EMPTY if ctx is None else ctx
+    tol = np.radians(tol_deg)
+    x = target - model.delta(target, ctx)
+    residual = x + model.delta(x, ctx) - target
+    step = np.abs(residual)
+    iterations = 0
+    while iterations < max_iter and np.any(step > tol):
+        iterations += 1
+        slope = 1.0 + model.delta_derivative(x, ctx)
+        slope = np.where(np.abs(slope) > 0.1, slope, 1.0)  # fixed-point step if flat
+        active = np.abs(residual) > tol
+        x = np.where(active, x - residual / slope, x)
+        residual = x + model.delta(x, ctx) - target
+        step = np.abs(residual)
+    converged = np.all(step <= tol, axis=1)
+    return CompensationResult(x, converged, np.degrees(step.max(axis=1)), "per-joint", iterations)
+
+
+def _pose_error(target: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """Space-frame twist (N, 6) (ω rad, v mm) taking current to target, first order in v."""
+    delta = target @ np.linalg.inv(current)
+    omega = Rotation.from_matrix(delta[:, :3, :3]).as_rotvec()
+    p = delta[:, :3, 3]
+    v = p - 0.5 * np.cross(omega, p)
+    return np.concatenate([omega, v], axis=1)
+
+
+def solve_general(
+    model: ErrorModel,
+    robot: Any,
+    q_ideal: np.ndarray,
+    ctx: Context | None = None,
+    *,
+    tool: np.ndarray | None = None,
+    tol_deg: float = TOL_DEG,
+    max_iter: int = _MAX_ITER,
+) -> CompensationResult:
+    """Damped Newton on the full forward model: actual_tcp(θc) = nominal TCP at θ_ideal."""
+    q_ideal = _ideal(q_ideal)
+    ctx = EMPTY if ctx is None else ctx
+    tol = np.radians(tol_deg)
+    declared = np.eye(4) if tool is None else np.asarray(tool, dtype=float)
+    target = robot.fk(q_ideal) @ declared
+    q = q_ideal - model.delta(q_ideal, ctx)  # the per-joint answer: a close seed
+    scale = np.array([1.0, 1.0, 1.0] + [1.0 / _LENGTH_SCALE_MM] * 3)
+    step = np.full(q.shape[0], np.inf)
+    iterations = 0
+    eye = np.eye(6)
+    while iterations < max_iter and np.any(step > tol):
+        iterations += 1
+        active = np.flatnonzero(step > tol)  # converged poses are left alone
+        sub_ctx = ctx.take(active)
+        current, jac = model.actual_tcp(robot, q[active], sub_ctx, declared, with_jacobian=True)
+        err = _pose_error(target[active], current) * scale
+        a = jac * scale[None, :, None]
+        at = np.swapaxes(a, 1, 2)
+        dq = np.linalg.solve(at @ a + _DAMPING * eye, (at @ err[:, :, None]))[:, :, 0]
+        q[active] += dq
+        step[active] = np.abs(dq).max(axis=1)
+    converged = step <= tol
+    return CompensationResult(q, converged, np.degrees(step), "general", iterations)
+
+
+def solve_compensation(
+    model: ErrorModel,
+    robot: Any,
+    q_ideal: np.ndarray,
+    ctx: Context | None = None,
+    *,
+    tool: np.ndarray | None = None,
+    tol_deg: float = TOL_DEG,
+) -> CompensationResult:
+    """Per-joint solve when the model allows it, else the general solve; status per pose."""
+    model.check_robot(robot.name)
+    if model.separable:
+        return solve_per_joint(model, q_ideal, ctx, tol_deg=tol_deg)
+    return solve_general(model, robot, q_ideal, ctx, tool=tool, tol_deg=tol_deg)
+
+
+def compensate(
+    model: ErrorModel,
+    robot: Any,
+    q_ideal: np.ndarray,
+    ctx: Context | None = None,
+    *,
+    tool: np.ndarray | None = None,
+) -> np.ndarray:
+    """Commanded joints (N, 6) rad; ModelError listing the rows that did not converge."""
+    result = solve_compensation(model, robot, q_ideal, ctx, tool=tool)
+    failed = result.failed_rows
+    if failed.size:
+        raise ModelError(
+            f"compensation did not converge for {failed.size} pose(s), rows "
+            f"{failed[:10].tolist()}{' …' if failed.size > 10 else ''}",
+            hint="use solve_compensation() to handle them one by one",
+        )
+    return result.q_cmd

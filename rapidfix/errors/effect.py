@@ -1,0 +1,249 @@
+"""The Effect interface: one physical cause of robot error, with a few parameters.
+
+An error model (`rapidfix.errors.model.ErrorModel`) is a list of effects. Each
+effect is one physical cause — the per-joint transmission error, joint
+compliance under gravity, a link-length error, backlash, thermal drift, a wrong
+tool or target-ball offset, a mis-registered tracker — and contributes to the
+forward model in one (or both) of two ways:
+
+* **joint errors**: `joint_delta(q_cmd, ctx) -> (N, 6)` rad, added to the
+  commanded joints: θ_actual = θ_cmd + Σ Δθ. Effects whose error on joint j
+  depends only on θ_j (and the context) set `separable = True`; a model made only
+  of those is compensated joint by joint (fast), anything else by the general
+  solve on the full forward model (`rapidfix.errors.compensate`), with no new code.
+* **geometry**: `apply_geometry(geometry, q_cmd, ctx) -> Geometry` returns a
+  changed copy of the joint axes, tool0 home pose, tool correction or measurement
+  frame (see `Geometry`). Arrays may be per pose (leading N axis) when the change
+  depends on the context (time, temperature).
+
+Parameters. Every effect exposes a flat float vector `params()` with matching
+`param_names` (units in the names: "_deg", "_mm", "_ppm", …), `set_params(p)`
+to write it back, and `uncertainty` (same length, or None before a fit). A
+generic least-squares fitter can therefore stack the vectors of all free effects
+(`free=True`), perturb them, and write the solution back, without knowing what
+the effects are. Internal units are radians and mm, like the rest of the model.
+
+Serialisation. `to_dict()` returns plain JSON data with a `"type"` key;
+`effect_from_dict(d)` rebuilds any registered effect. A subclass registers
+itself by defining a unique class attribute `type_name` (via
+`__init_subclass__`), so adding an effect is writing one class in one module and
+importing it in `rapidfix.errors.effects` (the registry's import list).
+
+Contract for implementers:
+- vectorised over N poses, no Python loop over poses;
+- return zeros (or the geometry unchanged) for poses the effect does not touch;
+- raise `rapidfix.exceptions.ModelError` when a needed context field is missing;
+- `_state()` / `_from_state()` cover everything that is not the parameter vector
+  (hyper-parameters, valid ranges), so `to_dict` round-trips exactly;
+- an effect that needs the arm itself (gravity torques from the joint frames)
+  keeps the robot name in its state and loads the model with
+  `rapidfix.kinematics.load_robot` (cached), so the interface stays robot-free.
+
+A minimal effect (a constant offset on joint 2, compensated by the per-joint solve):
+
+    class Joint2Offset(Effect):
+        type_name = "joint2_offset"
+        separable = True
+        adds_joint_delta = True
+        param_names = ("offset_rad",)
+
+        def __init__(self, name=None, *, free=True, offset=0.0):
+            super().__init__(name, free=free)
+            self.offset = offset
+
+        def params(self):
+            return np.array([self.offset])
+
+        def set_params(self, p):
+            self.offset = float(self._check_length(p)[0])
+
+        def joint_delta(self, q_cmd, ctx):
+            out = np.zeros_like(q_cmd)
+            out[:, 1] = self.offset
+            return out
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar
+
+import numpy as np
+
+from rapidfix.errors.context import Context
+from rapidfix.exceptions import ModelError
+
+_REGISTRY: dict[str, type[Effect]] = {}
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """What geometry effects change, in the robot base frame, mm and rad.
+
+    axis_dirs:   (6, 3) or (N, 6, 3), unit joint axes at θ = 0;
+    axis_points: (6, 3) or (N, 6, 3), a point on each axis, mm;
+    home:   (4, 4) or (N, 4, 4), tool0 pose at θ = 0;
+    tool:   (4, 4) or (N, 4, 4), correction applied after the declared tool /
+            target-ball offset, in that TCP's frame (identity = the declaration is
+            right; for a target ball the TCP frame is parallel to the flange);
+    world:  (4, 4) or (N, 4, 4), base frame → measurement (tracker) frame, used only
+            when predicting measurements, never when compensating.
+    """
+
+    axis_dirs: np.ndarray
+    axis_points: np.ndarray
+    home: np.ndarray
+    tool: np.ndarray
+    world: np.ndarray
+
+    @classmethod
+    def nominal(cls, robot: Any) -> Geometry:
+        """The robot's nominal geometry (identity tool correction and frame)."""
+        eye = np.eye(4)
+        return cls(
+            np.asarray(robot.axis_dirs, float),
+            np.asarray(robot.axis_points, float),
+            np.asarray(robot.home, float),
+            eye,
+            eye,
+        )
+
+    def replaced(self, **changes: np.ndarray) -> Geometry:
+        """A copy with some fields replaced."""
+        return replace(self, **changes)
+
+    def same_kinematics(self, robot: Any) -> bool:
+        """True when axes and home are exactly the robot's (robot.fk can be used)."""
+        return (
+            self.axis_dirs.shape == (6, 3)
+            and self.home.shape == (4, 4)
+            and np.array_equal(self.axis_dirs, robot.axis_dirs)
+            and np.array_equal(self.axis_points, robot.axis_points)
+            and np.array_equal(self.home, robot.home)
+        )
+
+
+class Effect:
+    """Base class of every effect. See the module docstring for the contract."""
+
+    type_name: ClassVar[str] = ""
+    #: error on joint j depends only on θ_j (and the context): per-joint compensation works
+    separable: ClassVar[bool] = False
+    #: contributes joint errors / changes geometry (lets the forward model skip work)
+    adds_joint_delta: ClassVar[bool] = False
+    changes_geometry: ClassVar[bool] = False
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.type_name:
+            if cls.type_name in _REGISTRY and _REGISTRY[cls.type_name] is not cls:
+                raise TypeError(f"effect type {cls.type_name!r} registered twice")
+            _REGISTRY[cls.type_name] = cls
+
+    def __init__(self, name: str | None = None, *, free: bool = True) -> None:
+        self.name = name or self.type_name
+        self.free = free
+        self.uncertainty: np.ndarray | None = None
+
+    # -- parameters -------------------------------------------------------------
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """Names of the entries of `params()`, units in the name."""
+        raise NotImplementedError
+
+    def params(self) -> np.ndarray:
+        """The parameter vector (a copy)."""
+        raise NotImplementedError
+
+    def set_params(self, p: np.ndarray) -> None:
+        """Write a parameter vector of the same length back."""
+        raise NotImplementedError
+
+    def _check_length(self, p: np.ndarray) -> np.ndarray:
+        p = np.asarray(p, dtype=float).ravel()
+        if p.shape[0] != len(self.param_names):
+            raise ValueError(
+                f"{self.name}: {p.shape[0]} parameters given, {len(self.param_names)} expected"
+            )
+        return p
+
+    # -- contributions ----------------------------------------------------------
+    def joint_delta(self, q_cmd: np.ndarray, ctx: Context) -> np.ndarray:
+        """Joint errors (N, 6) rad added to the commanded joints (N, 6) rad."""
+        return np.zeros_like(np.asarray(q_cmd, dtype=float))
+
+    def joint_delta_derivative(self, q_cmd: np.ndarray, ctx: Context) -> np.ndarray:
+        """∂Δθ_j/∂θ_j (N, 6) for separable effects; the general solve uses it if given."""
+        return np.zeros_like(np.asarray(q_cmd, dtype=float))
+
+    def apply_geometry(self, geometry: Geometry, q_cmd: np.ndarray, ctx: Context) -> Geometry:
+        """The geometry with this effect applied (unchanged by default)."""
+        return geometry
+
+    # -- serialisation ----------------------------------------------------------
+    def _state(self) -> dict[str, Any]:
+        """JSON data besides the parameter vector (override when there is any)."""
+        return {}
+
+    @classmethod
+    def _from_state(cls, name: str, state: dict[str, Any]) -> Effect:
+        """Build an instance from `_state()` output; parameters are set afterwards."""
+        return cls(name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON data with a "type" key; `effect_from_dict` reverses it."""
+        out: dict[str, Any] = {
+            "type": self.type_name,
+            "name": self.name,
+            "free": self.free,
+            "params": dict(zip(self.param_names, self.params().tolist())),
+        }
+        if self.uncertainty is not None:
+            out["uncertainty"] = dict(zip(self.param_names, np.asarray(self.uncertainty).tolist()))
+        state = self._state()
+        if state:
+            out["state"] = state
+        return out
+
+    def describe(self) -> str:
+        """One line for summaries."""
+        return f"{self.name} ({self.type_name}, {len(self.param_names)} parameters)"
+
+
+def registered_effects() -> dict[str, type[Effect]]:
+    """Type name → class of every registered effect."""
+    import rapidfix.errors.effects  # noqa: F401  (imports every effect module)
+
+    return dict(_REGISTRY)
+
+
+def effect_from_dict(data: dict[str, Any], where: str = "effect") -> Effect:
+    """Rebuild an effect from `to_dict()` output; ModelError names the bad key."""
+    types = registered_effects()
+    try:
+        kind = data["type"]
+        name = data.get("name", kind)
+        values = data["params"]
+    except (KeyError, TypeError, AttributeError) as err:
+        raise ModelError(f"{where}: missing key {err}", column=str(err).strip("'")) from None
+    if kind not in types:
+        raise ModelError(
+            f"{where}: unknown effect type {kind!r}", hint=f"known: {', '.join(sorted(types))}"
+        )
+    cls = types[kind]
+    try:
+        effect = cls._from_state(name, data.get("state", {}))
+        names = effect.param_names
+        missing = [n for n in names if n not in values]
+        if missing:
+            raise ModelError(f"{where}.params: missing {missing[0]!r}", column=missing[0])
+        effect.set_params(np.array([float(values[n]) for n in names]))
+        if "uncertainty" in data:
+            unc = data["uncertainty"]
+            effect.uncertainty = np.array([float(unc[n]) for n in names])
+        effect.free = bool(data.get("free", True))
+    except ModelError:
+        raise
+    except (KeyError, TypeError, ValueError) as err:
+        raise ModelError(f"{where}: malformed effect data ({err})") from None
+    return effect
