@@ -1,0 +1,281 @@
+"""The true errors of a virtual robot: what the fitter has to find, drawn from a seed.
+
+Written independently of `rapidfix.errors` on purpose: the simulator is the truth
+the error model is judged against, so it shares no code with it.
+
+Always present: a per-joint, angle-dependent error Δθ_j(θ_j) = offset + Σ gear
+harmonics, 0.005–0.05° in size. Optional effects (names as `rapidfix diagnose`
+uses them):
+
+- ``joint_compliance``: joints 2 and 3 deflect by compliance × gravity torque of the
+  links and the payload, the torque taken in the arm's actual configuration;
+- ``link_geometry``: axis points, axis directions (joints 2–6) and tool0's home
+  pose differ from the nominal model;
+- ``backlash``: joints 1–3 lag by half their backlash against the direction they
+  last moved;
+- ``thermal_drift``: the arm grows by α·(T − T_ref) as it warms up over time;
+- ``tool_offset``: the target ball is not where setup.toml says;
+- ``joint_coupling``: one joint's error depends on another joint's angle;
+- ``registration_scale``: the tracker's length scale is off by some ppm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+EFFECTS: tuple[str, ...] = (
+    "joint_compliance",
+    "link_geometry",
+    "backlash",
+    "thermal_drift",
+    "tool_offset",
+    "joint_coupling",
+    "registration_scale",
+)
+
+GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s², base z is up
+# Lumped mass model of an IRB 1600-class arm (kg): link 2 (lower arm), link 3
+# (upper arm), the wrist; each body's centre of mass lies a fraction of the way
+# between two joint-axis points of the current pose: (body, from joint, to, fraction).
+LINK_MASSES_KG = {"lower_arm": 17.0, "upper_arm": 21.0, "wrist": 6.0}
+_BODIES = (("lower_arm", 1, 2, 0.5), ("upper_arm", 2, 4, 0.4), ("wrist", 4, 4, 0.0))
+
+
+@dataclass
+class JointErrors:
+    """Per joint: Δθ(θ) = offset + Σ_k amp_k sin(order_k θ + phase_k), all rad."""
+
+    offset: np.ndarray  # (6,)
+    orders: np.ndarray  # (6, K) int
+    amps: np.ndarray  # (6, K)
+    phases: np.ndarray  # (6, K)
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        """Δθ (N, 6) at commanded joints q (N, 6) rad."""
+        q = np.atleast_2d(q)
+        arg = q[:, :, None] * self.orders[None] + self.phases[None]
+        return self.offset + np.sum(self.amps[None] * np.sin(arg), axis=-1)
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, n_harmonics: int = 3) -> JointErrors:
+        """Random errors 0.005–0.05° in size: an offset plus gear harmonics of orders 1–8."""
+        size = np.radians(rng.uniform(0.012, 0.05, 6))
+        weights = rng.dirichlet(np.ones(n_harmonics + 1), 6)
+        offset = size * weights[:, 0] * rng.choice([-1.0, 1.0], 6)
+        orders = np.stack([np.sort(rng.choice(np.arange(1, 9), n_harmonics, replace=False))
+                           for _ in range(6)])
+        amps = size[:, None] * weights[:, 1:]
+        phases = rng.uniform(0.0, 2.0 * np.pi, (6, n_harmonics))
+        return cls(offset, orders, amps, phases)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"offset_deg": np.degrees(self.offset).tolist(),
+                "orders": self.orders.tolist(),
+                "amplitude_deg": np.degrees(self.amps).tolist(),
+                "phase_rad": self.phases.tolist()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> JointErrors:
+        return cls(np.radians(d["offset_deg"]), np.asarray(d["orders"], dtype=int),
+                   np.radians(d["amplitude_deg"]), np.asarray(d["phase_rad"], dtype=float))
+
+
+@dataclass
+class TrueErrors:
+    """Every true error of one virtual robot (internal units: rad, mm, 1/K, s)."""
+
+    joint: JointErrors
+    compliance: np.ndarray | None = None  # (2,) rad/(N·m) for joints 2 and 3
+    axis_dirs: np.ndarray | None = None  # (6, 3) actual screws (link_geometry)
+    axis_points: np.ndarray | None = None
+    home: np.ndarray | None = None  # (4, 4)
+    backlash: np.ndarray | None = None  # (6,) full width, rad
+    thermal: dict[str, float] | None = None  # alpha_per_k, t_ref_c, t_start_c, rise_k, tau_s
+    tool_offset: np.ndarray | None = None  # (3,) true minus declared ball offset, mm
+    coupling: dict[str, float] | None = None  # source, target (0-based), amp rad, phase
+    scale_ppm: float = 0.0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def effects(self) -> list[str]:
+        """Names of the optional effects that are on."""
+        on = {"joint_compliance": self.compliance is not None,
+              "link_geometry": self.axis_dirs is not None,
+              "backlash": self.backlash is not None,
+              "thermal_drift": self.thermal is not None,
+              "tool_offset": self.tool_offset is not None,
+              "joint_coupling": self.coupling is not None,
+              "registration_scale": self.scale_ppm != 0.0}
+        return [name for name in EFFECTS if on[name]]
+
+    # ---- drawing ---------------------------------------------------------------------
+
+    @classmethod
+    def draw(cls, robot: Any, effects: tuple[str, ...] | list[str],
+             rng: np.random.Generator) -> TrueErrors:
+        """Random true errors for `robot` (a RobotModel) with the named optional effects."""
+        unknown = sorted(set(effects) - set(EFFECTS))
+        if unknown:
+            raise ValueError(f"unknown effect(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(EFFECTS)}")
+        # Draw everything whether used or not, so adding an effect leaves the others unchanged.
+        joint = JointErrors.draw(rng)
+        compliance = rng.uniform(0.6e-6, 1.5e-6, 2)
+        dirs, points, home = _perturbed_geometry(robot, rng)
+        backlash = np.zeros(6)
+        backlash[:3] = np.radians(rng.uniform(0.01, 0.03, 3))
+        thermal = {"alpha_per_k": float(rng.uniform(1.0e-5, 2.3e-5)), "t_ref_c": 20.0,
+                   "t_start_c": 20.0, "rise_k": float(rng.uniform(4.0, 8.0)),
+                   "tau_s": float(rng.uniform(1200.0, 3600.0))}
+        tool = rng.normal(size=3)
+        tool *= rng.uniform(0.2, 0.6) / np.linalg.norm(tool)
+        pairs = ((1, 2), (3, 4), (4, 5), (0, 1))
+        src, dst = pairs[int(rng.integers(len(pairs)))]
+        coupling = {"source": src, "target": dst,
+                    "amp_rad": float(np.radians(rng.uniform(0.01, 0.03))),
+                    "phase_rad": float(rng.uniform(0.0, 2.0 * np.pi))}
+        scale = float(rng.uniform(30.0, 80.0) * rng.choice([-1.0, 1.0]))
+        on = set(effects)
+        geometry = "link_geometry" in on
+        return cls(
+            joint=joint,
+            compliance=compliance if "joint_compliance" in on else None,
+            axis_dirs=dirs if geometry else None,
+            axis_points=points if geometry else None,
+            home=home if geometry else None,
+            backlash=backlash if "backlash" in on else None,
+            thermal=thermal if "thermal_drift" in on else None,
+            tool_offset=tool if "tool_offset" in on else None,
+            coupling=coupling if "joint_coupling" in on else None,
+            scale_ppm=scale if "registration_scale" in on else 0.0,
+        )
+
+    # ---- evaluation ------------------------------------------------------------------
+
+    def joint_delta(self, q: np.ndarray, direction: np.ndarray | None) -> np.ndarray:
+        """Joint errors (N, 6) rad that depend on the commanded joints and motion direction."""
+        delta = self.joint(q)
+        if self.coupling is not None:
+            c = self.coupling
+            delta[:, int(c["target"])] += c["amp_rad"] * np.sin(
+                q[:, int(c["source"])] + c["phase_rad"])
+        if self.backlash is not None and direction is not None:
+            delta -= 0.5 * self.backlash * direction
+        return delta
+
+    def temperature(self, time_s: np.ndarray) -> np.ndarray:
+        """Arm temperature (°C) at time t: a first-order warm-up from t_start_c."""
+        th = self.thermal or {"t_start_c": 20.0, "rise_k": 0.0, "tau_s": 1.0}
+        return th["t_start_c"] + th["rise_k"] * -np.expm1(-np.asarray(time_s) / th["tau_s"])
+
+    def thermal_scale(self, temp_c: np.ndarray | None) -> np.ndarray | float:
+        """Length factor of the arm at temperature T: 1 + α (T − T_ref)."""
+        if self.thermal is None or temp_c is None:
+            return 1.0
+        return 1.0 + self.thermal["alpha_per_k"] * (np.asarray(temp_c) - self.thermal["t_ref_c"])
+
+    # ---- serialisation ---------------------------------------------------------------
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data (degrees, mm, ppm at the interface)."""
+        d: dict[str, Any] = {"effects": self.effects, "joint_errors": self.joint.to_dict()}
+        if self.compliance is not None:
+            d["joint_compliance_rad_per_nm"] = {"j2": float(self.compliance[0]),
+                                                "j3": float(self.compliance[1]),
+                                                "link_masses_kg": LINK_MASSES_KG}
+        if self.axis_dirs is not None:
+            d["link_geometry"] = {"axis_dirs": self.axis_dirs.tolist(),
+                                  "axis_points_mm": self.axis_points.tolist(),
+                                  "home": self.home.tolist()}
+        if self.backlash is not None:
+            d["backlash_deg"] = np.degrees(self.backlash).tolist()
+        if self.thermal is not None:
+            d["thermal_drift"] = dict(self.thermal)
+        if self.tool_offset is not None:
+            d["tool_offset_error_mm"] = self.tool_offset.tolist()
+        if self.coupling is not None:
+            c = self.coupling
+            d["joint_coupling"] = {"source_joint": int(c["source"]) + 1,
+                                   "target_joint": int(c["target"]) + 1,
+                                   "amplitude_deg": float(np.degrees(c["amp_rad"])),
+                                   "phase_rad": c["phase_rad"]}
+        if self.scale_ppm:
+            d["registration_scale_ppm"] = self.scale_ppm
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> TrueErrors:
+        """Inverse of `to_dict`."""
+        geo = d.get("link_geometry")
+        comp = d.get("joint_compliance_rad_per_nm")
+        coup = d.get("joint_coupling")
+        return cls(
+            joint=JointErrors.from_dict(d["joint_errors"]),
+            compliance=None if comp is None else np.array([comp["j2"], comp["j3"]]),
+            axis_dirs=None if geo is None else np.asarray(geo["axis_dirs"]),
+            axis_points=None if geo is None else np.asarray(geo["axis_points_mm"]),
+            home=None if geo is None else np.asarray(geo["home"]),
+            backlash=None if "backlash_deg" not in d else np.radians(d["backlash_deg"]),
+            thermal=d.get("thermal_drift"),
+            tool_offset=(None if "tool_offset_error_mm" not in d
+                         else np.asarray(d["tool_offset_error_mm"])),
+            coupling=None if coup is None else {
+                "source": coup["source_joint"] - 1, "target": coup["target_joint"] - 1,
+                "amp_rad": float(np.radians(coup["amplitude_deg"])),
+                "phase_rad": coup["phase_rad"]},
+            scale_ppm=float(d.get("registration_scale_ppm", 0.0)),
+        )
+
+
+def _perturbed_geometry(robot: Any, rng: np.random.Generator
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Screws of joints 2–6 and tool0's home pose moved by link-length and tilt errors.
+
+    Joint 1's axis stays: it defines the base frame, which the tracker registration
+    absorbs anyway. Points move ~0.15 mm across their axes, axes tilt ~0.01°.
+    """
+    dirs = np.array(robot.axis_dirs, dtype=float)
+    points = np.array(robot.axis_points, dtype=float)
+    for j in range(1, 6):
+        tilt = np.cross(dirs[j], rng.normal(size=3))
+        tilt *= np.radians(rng.uniform(0.005, 0.02)) / np.linalg.norm(tilt)
+        dirs[j] = Rotation.from_rotvec(tilt).apply(dirs[j])
+        shift = np.cross(dirs[j], rng.normal(size=3))
+        points[j] += shift * rng.uniform(0.05, 0.3) / np.linalg.norm(shift)
+    home = np.array(robot.home, dtype=float)
+    home[:3, 3] += rng.normal(0.0, 0.1, 3)
+    home[:3, :3] = Rotation.from_rotvec(rng.normal(0.0, np.radians(0.01), 3)).as_matrix() \
+        @ home[:3, :3]
+    return dirs, points, home
+
+
+def gravity_torque(axis_dirs: np.ndarray, axis_points: np.ndarray, payload_pos: np.ndarray,
+                   payload_kg: np.ndarray) -> np.ndarray:
+    """Gravity torque (N, 2) N·m about joints 2 and 3 from the links and the payload.
+
+    `axis_dirs`/`axis_points` (N, 6, 3) are the current joint axes (mm), the payload
+    hangs at `payload_pos` (N, 3) mm. The lumped bodies sit between joint-axis
+    points (see `_BODIES`); the wrist at the wrist centre (axis-5 point).
+    """
+    n = axis_points.shape[0]
+    centres, masses = [], []
+    for name, a, b, frac in _BODIES:
+        centres.append(axis_points[:, a] + frac * (axis_points[:, b] - axis_points[:, a]))
+        masses.append(np.full(n, LINK_MASSES_KG[name]))
+    centres.append(payload_pos)
+    masses.append(np.broadcast_to(np.asarray(payload_kg, dtype=float), (n,)))
+    c = np.stack(centres, axis=1) * 1e-3  # (N, B, 3) m
+    m = np.stack(masses, axis=1)  # (N, B)
+    force = m[..., None] * GRAVITY  # (N, B, 3) N
+    # Joint 2 carries every body; joint 3 every body but the lower arm.
+    carried = np.array([[1, 1, 1, 1], [0, 1, 1, 1]], dtype=float)  # (2, B)
+    out = np.empty((n, 2))
+    for k, j in enumerate((1, 2)):
+        lever = c - axis_points[:, j][:, None, :] * 1e-3
+        moment = np.cross(lever, force)  # (N, B, 3)
+        out[:, k] = np.einsum("nbi,ni,b->n", moment, axis_dirs[:, j], carried[k])
+    return out

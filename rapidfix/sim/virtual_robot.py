@@ -1,0 +1,245 @@
+"""A virtual robot: the nominal model plus chosen true errors, executed and measured.
+
+`VirtualRobot.measure(q_cmd, ctx)` "runs" commanded joints (N, 6) rad on the true
+robot and returns where the target ball really is (noise-free) or what a tracker
+would report (with joint repeatability and tracker noise). The context gives the
+conditions each row ran under — any object or mapping with the optional fields
+`payload_kg`, `time_s`, `temp_c` (N,) and `q_prev` (N, 6) rad (the pose before
+each row; without it the rows are taken as executed in order). This is the same
+shape as `rapidfix.errors.context.Context`, which is accepted as is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rapidfix.kinematics import RobotModel, load_robot
+from rapidfix.sim.tracker import VirtualTracker
+from rapidfix.sim.true_errors import TrueErrors, gravity_torque
+
+DEFAULT_ROBOT = "IRB1600-10/1.45"
+#: Target ball in the flange frame, mm: 100 mm off the joint-6 axis so joint 6 draws a circle.
+DEFAULT_SMR_OFFSET_MM = (60.0, 80.0, 90.0)
+#: Joint repeatability (1σ, rad): about ±0.01–0.03 mm at the TCP of a 1.45 m arm.
+DEFAULT_REPEATABILITY_RAD = 1.0e-5
+
+
+@dataclass(frozen=True)
+class RunConditions:
+    """Per-row conditions, each (N,) or None; `q_prev` (N, 6) rad or None."""
+
+    payload_kg: np.ndarray | None = None
+    time_s: np.ndarray | None = None
+    temp_c: np.ndarray | None = None
+    q_prev: np.ndarray | None = None
+
+
+def _field(ctx: Any, name: str) -> Any:
+    if ctx is None:
+        return None
+    if isinstance(ctx, Mapping):
+        return ctx.get(name)
+    return getattr(ctx, name, None)
+
+
+def motion_direction(q: np.ndarray, q_prev: np.ndarray | None) -> np.ndarray:
+    """Sign (N, 6) of the last motion of each joint, rows executed in order.
+
+    Where a joint did not move (or q_prev is unknown for the first row) it keeps the
+    direction of the row before; before any motion the direction is +1.
+    """
+    if q_prev is None:
+        q_prev = np.vstack([q[:1], q[:-1]])
+    step = np.sign(np.round(q - q_prev, 12))
+    n = len(q)
+    idx = np.where(step != 0, np.arange(n)[:, None], -1)
+    last = np.maximum.accumulate(idx, axis=0)
+    filled = np.take_along_axis(step, np.maximum(last, 0), axis=0)
+    return np.where(last >= 0, filled, 1.0)
+
+
+class VirtualRobot:
+    """Nominal model + `TrueErrors` + a `VirtualTracker`; see the module docstring."""
+
+    def __init__(self, robot: RobotModel, errors: TrueErrors, tracker: VirtualTracker,
+                 smr_offset_mm: np.ndarray, *, payload_kg: float = 0.0,
+                 repeatability_rad: float = DEFAULT_REPEATABILITY_RAD, seed: int = 0) -> None:
+        self.robot = robot
+        self.errors = errors
+        self.tracker = tracker
+        self.smr_offset_mm = np.asarray(smr_offset_mm, dtype=float)
+        self.payload_kg = float(payload_kg)
+        self.repeatability_rad = float(repeatability_rad)
+        self.seed = int(seed)
+        self._rng = np.random.default_rng([self.seed, 7])
+        if errors.axis_dirs is not None:
+            self.actual_model = robot.with_screws(errors.axis_dirs, errors.axis_points,
+                                                  errors.home)
+        else:
+            self.actual_model = robot
+
+    @classmethod
+    def create(cls, robot: str | RobotModel = DEFAULT_ROBOT, seed: int = 0,
+               effects: tuple[str, ...] | list[str] = (),
+               smr_offset_mm: tuple[float, float, float] | np.ndarray = DEFAULT_SMR_OFFSET_MM,
+               payload_kg: float = 0.0,
+               repeatability_rad: float = DEFAULT_REPEATABILITY_RAD) -> VirtualRobot:
+        """A robot with random true errors (per-joint always, plus `effects`) and tracker."""
+        model = load_robot(robot) if isinstance(robot, str) else robot
+        rng = np.random.default_rng(seed)
+        errors = TrueErrors.draw(model, tuple(effects), rng)
+        tracker = VirtualTracker.place(rng, scale_ppm=errors.scale_ppm)
+        return cls(model, errors, tracker, np.asarray(smr_offset_mm, dtype=float),
+                   payload_kg=payload_kg, repeatability_rad=repeatability_rad, seed=seed)
+
+    # ---- the true robot --------------------------------------------------------------
+
+    @property
+    def true_smr_offset_mm(self) -> np.ndarray:
+        """Where the ball really is in the flange frame (declared + tool offset error)."""
+        if self.errors.tool_offset is None:
+            return self.smr_offset_mm
+        return self.smr_offset_mm + self.errors.tool_offset
+
+    def temperature(self, ctx: Any, n: int) -> np.ndarray | None:
+        """Arm temperature per row: the context's temp_c, else from time_s, else None."""
+        temp = _field(ctx, "temp_c")
+        if temp is not None:
+            return np.broadcast_to(np.asarray(temp, dtype=float), (n,))
+        time = _field(ctx, "time_s")
+        if time is not None and self.errors.thermal is not None:
+            return self.errors.temperature(np.broadcast_to(np.asarray(time, dtype=float), (n,)))
+        return None
+
+    def actual_joints(self, q_cmd: np.ndarray, ctx: Any = None,
+                      jitter: np.ndarray | None = None) -> np.ndarray:
+        """The joint angles (N, 6) rad the robot really takes for commanded q_cmd."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        q_prev = _field(ctx, "q_prev")
+        direction = None
+        if self.errors.backlash is not None:
+            direction = motion_direction(q, None if q_prev is None else np.atleast_2d(q_prev))
+        q_act = q + self.errors.joint_delta(q, direction)
+        if jitter is not None:
+            q_act = q_act + jitter
+        if self.errors.compliance is not None:
+            payload = _field(ctx, "payload_kg")
+            payload = self.payload_kg if payload is None else payload
+            dirs, points = self.actual_model.joint_frames(q_act)
+            ball = self._ball(q_act, 1.0)
+            torque = gravity_torque(dirs, points, ball, np.broadcast_to(payload, (len(q),)))
+            q_act = q_act.copy()
+            q_act[:, 1:3] += self.errors.compliance * torque
+        return q_act
+
+    def _ball(self, q_act: np.ndarray, scale: np.ndarray | float) -> np.ndarray:
+        T = self.actual_model.fk(q_act)
+        return T[:, :3, :3] @ self.true_smr_offset_mm + np.reshape(scale, (-1, 1)) * T[:, :3, 3]
+
+    def _positions(self, q_cmd: np.ndarray, ctx: Any, jitter: np.ndarray | None) -> np.ndarray:
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
+        return self._ball(self.actual_joints(q, ctx, jitter), scale)
+
+    def ball_positions(self, q_cmd: np.ndarray, ctx: Any = None) -> np.ndarray:
+        """Noise-free true ball centres (N, 3) mm in the robot base frame."""
+        return self._positions(q_cmd, ctx, None)
+
+    def ideal_positions(self, q_cmd: np.ndarray) -> np.ndarray:
+        """Where a perfect robot would put the declared ball: nominal FK, mm, base frame."""
+        T = self.robot.fk(np.atleast_2d(np.asarray(q_cmd, dtype=float)))
+        return T[:, :3, :3] @ self.smr_offset_mm + T[:, :3, 3]
+
+    def measure(self, q_cmd: np.ndarray, ctx: Any = None, *, noise: bool = True,
+                frame: str = "base", seed: int | None = None) -> np.ndarray:
+        """Execute q_cmd (N, 6) rad and measure the ball (N, 3) mm.
+
+        `frame="base"`: in the robot base frame (a perfectly registered tracker);
+        `frame="tracker"`: as the tracker reports it (its pose and scale error).
+        With `noise`, each row gets joint-repeatability jitter and tracker noise;
+        `seed` makes one call reproducible, else the robot's own stream is used.
+        """
+        if frame not in ("base", "tracker"):
+            raise ValueError("frame must be 'base' or 'tracker'")
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        rng = self._rng if seed is None else np.random.default_rng(seed)
+        jitter = rng.normal(0.0, self.repeatability_rad, q.shape) if noise else None
+        p = self._positions(q, ctx, jitter)
+        sigma = self.tracker.sigma_mm(p)
+        out = self.tracker.to_tracker(p) if frame == "tracker" else p
+        if noise:
+            out = out + rng.normal(size=out.shape) * sigma[:, None]
+        return out
+
+    def ballbar_lengths(self, q_cmd: np.ndarray, centre_mm: np.ndarray, ctx: Any = None, *,
+                        noise: bool = True, sigma_mm: float = 0.001,
+                        seed: int | None = None) -> np.ndarray:
+        """Lengths (N,) mm a ballbar pivoting at `centre_mm` (base frame) would read."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        rng = self._rng if seed is None else np.random.default_rng(seed)
+        jitter = rng.normal(0.0, self.repeatability_rad, q.shape) if noise else None
+        length = np.linalg.norm(self._positions(q, ctx, jitter) - centre_mm, axis=1)
+        return length + (rng.normal(0.0, sigma_mm, len(q)) if noise else 0.0)
+
+    # ---- what the truth file states --------------------------------------------------
+
+    def noise_floor(self, q_cmd: np.ndarray, ctx: Any = None, *, draws: int = 200,
+                    seed: int = 0) -> dict[str, float]:
+        """Expected mean TCP distance error from noise and repeatability alone, mm.
+
+        Monte Carlo over `draws` repeats of the poses: a perfectly compensated robot,
+        perfectly registered, still shows this much error on these poses.
+        """
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        rng = np.random.default_rng(seed)
+        qq = np.tile(q, (draws, 1))
+        big_ctx = None
+        if ctx is not None:
+            fields = {}
+            for name in ("payload_kg", "time_s", "temp_c"):
+                v = _field(ctx, name)
+                fields[name] = None if v is None else np.tile(
+                    np.broadcast_to(np.asarray(v, dtype=float), (len(q),)), draws)
+            q_prev = _field(ctx, "q_prev")
+            fields["q_prev"] = None if q_prev is None else np.tile(np.atleast_2d(q_prev),
+                                                                   (draws, 1))
+            big_ctx = RunConditions(**fields)
+        exact = self._positions(qq, big_ctx, None)
+        jittered = self._positions(qq, big_ctx,
+                                   rng.normal(0.0, self.repeatability_rad, qq.shape))
+        tracker = rng.normal(size=exact.shape) * self.tracker.sigma_mm(exact)[:, None]
+        return {
+            "mean_tcp_error_mm": float(np.mean(np.linalg.norm(jittered + tracker - exact,
+                                                              axis=1))),
+            "repeatability_only_mm": float(np.mean(np.linalg.norm(jittered - exact, axis=1))),
+            "tracker_only_mm": float(np.mean(np.linalg.norm(tracker, axis=1))),
+            "tracker_sigma_mean_mm": float(np.mean(self.tracker.sigma_mm(exact))),
+        }
+
+    def truth(self) -> dict[str, Any]:
+        """JSON data of everything true about this robot (see `from_truth`)."""
+        return {"robot": self.robot.name, "seed": self.seed,
+                "declared_smr_offset_mm": self.smr_offset_mm.tolist(),
+                "true_smr_offset_mm": self.true_smr_offset_mm.tolist(),
+                "payload_kg": self.payload_kg,
+                "repeatability_rad": self.repeatability_rad,
+                "errors": self.errors.to_dict(), "tracker": self.tracker.to_dict()}
+
+    @classmethod
+    def from_truth(cls, truth: Mapping[str, Any]) -> VirtualRobot:
+        """Rebuild the robot a truth dict (or truth.json's content) describes."""
+        return cls(load_robot(truth["robot"]), TrueErrors.from_dict(truth["errors"]),
+                   VirtualTracker.from_dict(truth["tracker"]),
+                   np.asarray(truth["declared_smr_offset_mm"], dtype=float),
+                   payload_kg=float(truth.get("payload_kg", 0.0)),
+                   repeatability_rad=float(truth["repeatability_rad"]),
+                   seed=int(truth.get("seed", 0)))
+
+    def true_joint_error(self, q_cmd: np.ndarray, ctx: Any = None) -> np.ndarray:
+        """Δθ = θ_actual − θ_cmd (N, 6) rad, noise-free, in the simulator's own gauge."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        return self.actual_joints(q, ctx) - q
