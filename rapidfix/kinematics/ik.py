@@ -1,17 +1,21 @@
 """All-branch inverse kinematics: analytic branches, ±360° variants, limits, statuses.
 
 `solve_all(model, T)` is what `RobotModel.ik` calls. For a nominal model the eight
-branches come in closed form (ik_analytic); for an actual model they are the
-nominal branches refined on the actual screws (ik_numeric). Every branch is then
-repeated for each whole-turn shift that an axis's limits allow (axes 4 and 6 of
-most ABB arms have more than one turn; axis 3's range may leave (-180°, 180°]),
-and checked against the limits. Batches are processed in chunks to bound memory.
+branches come in closed form (ik_analytic, or its compiled twin ik_compiled when
+numba is installed); for an actual model they are the nominal branches refined on
+the actual screws (ik_numeric). Every branch is then checked against the limits
+for each whole-turn shift the axis's range allows (axes 4 and 6 of most ABB arms
+have more than one turn; axis 3's range may leave (-180°, 180°]). The result keeps
+the eight branches and, per axis, a bit mask of the turn variants within the
+limits; `IKSolutions` expands every combination only when a caller asks.
 """
 
 from __future__ import annotations
 
-import itertools
+import importlib.util
+import os
 from functools import lru_cache
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -19,21 +23,28 @@ import numpy as np
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.ik_analytic import analytic_solver
 from rapidfix.kinematics.ik_numeric import refine
-from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
+from rapidfix.kinematics.ik_result import IKSolutions, IKStatus, mask_dtype
 from rapidfix.kinematics.model import as_joint_batch, as_pose_batch
 from rapidfix.kinematics.screws import invert_transform
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from rapidfix.kinematics.frames import Tool, WorkObject
     from rapidfix.kinematics.model import RobotModel
 
 WRIST_TOL = 1e-7
 """|sin θ5| below which the wrist counts as singular (θ4 is then held)."""
 
-CHUNK = 8192
-_LIMIT_TOL = 1e-9
-_RIGID_TOL = 1e-6
+CHUNK = 4096
+"""Poses per numpy chunk: temporaries of a chunk stay in the L2/L3 cache."""
+LIMIT_TOL = 1e-9
+"""rad by which an angle may pass a joint limit and still count as inside."""
+RIGID_TOL = 1e-6
+"""Largest deviation from an orthonormal rotation and a [0, 0, 0, 1] last row."""
 _FIXED_POINT_STEPS = 6
+BACKEND_ENV = "RAPIDFIX_IK_BACKEND"
+"""Environment variable choosing the closed-form code: auto (default), numpy or numba."""
 
 
 def turn_counts(limits: np.ndarray) -> tuple[int, ...]:
@@ -43,22 +54,8 @@ def turn_counts(limits: np.ndarray) -> tuple[int, ...]:
     with exactly ±180° gets two, so that both −180° and +180° are offered.
     """
     return tuple(
-        int(np.floor((hi - lo + 2.0 * _LIMIT_TOL) / (2.0 * np.pi))) + 1 for lo, hi in limits
+        int(np.floor((hi - lo + 2.0 * LIMIT_TOL) / (2.0 * np.pi))) + 1 for lo, hi in limits
     )
-
-
-def turn_offsets(limits: np.ndarray) -> np.ndarray:
-    """All combinations (V, 6) of whole-turn shifts, axis 1 varying slowest."""
-    counts = turn_counts(limits)
-    return np.array(list(itertools.product(*(range(c) for c in counts))), dtype=float)
-
-
-@lru_cache(maxsize=64)
-def _turn_table(counts: tuple[int, ...]) -> np.ndarray:
-    """The whole-turn shifts (V, 6) in radians for the given variant counts."""
-    table = 2.0 * np.pi * np.array(list(itertools.product(*(range(c) for c in counts))))
-    table.setflags(write=False)
-    return table
 
 
 def _rigid(T: np.ndarray) -> np.ndarray:
@@ -66,9 +63,9 @@ def _rigid(T: np.ndarray) -> np.ndarray:
     finite = np.all(np.isfinite(T), axis=(1, 2))
     Ts = np.where(finite[:, None, None], T, np.eye(4))
     R = Ts[:, :3, :3]
-    ortho = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2)) < _RIGID_TOL
-    det = np.linalg.det(R) > 0
-    row = np.abs(Ts[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) < _RIGID_TOL
+    ortho = np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2)) < RIGID_TOL
+    det = np.einsum("ni,ni->n", R[:, 0], np.cross(R[:, 1], R[:, 2])) > 0
+    row = np.abs(Ts[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) < RIGID_TOL
     return finite & ortho & det & row
 
 
@@ -110,47 +107,114 @@ def _base_branches(
     return q_ref.reshape(q8.shape), conv.reshape(ok8.shape), sing8
 
 
+def limit_masks(
+    q8: np.ndarray,
+    ok8: np.ndarray,
+    limits: np.ndarray,
+    counts: tuple[int, ...],
+    out_q: np.ndarray,
+    out_turn_ok: np.ndarray,
+) -> None:
+    """Wrap branch angles q8 (n, 8, 6) into [lo, lo + 2π) per axis (NaN where not ok8)
+    into out_q, and set bit k of out_turn_ok (n, 8, 6) when angle + k turns is within
+    the limits. The wrap starts a hair below lo, so that an angle at a limit is
+    offered at both ends of a range of a whole number of turns.
+
+    Every variant is then at or above the lower limit, so only the upper one is
+    checked, and the variants inside are the first few: the mask is 2^m − 1."""
+    lo, hi = limits[:, 0], limits[:, 1]
+    start = lo - LIMIT_TOL
+    np.subtract(q8, start, out=out_q)
+    _mod_turn(out_q)
+    out_q += start
+    out_q[~ok8] = np.nan
+    top = hi + LIMIT_TOL
+    inside = (out_q <= top).astype(out_turn_ok.dtype)  # m: the variants inside
+    for k in range(1, max(counts)):
+        for j in np.flatnonzero(np.asarray(counts) > k):
+            inside[:, :, j] += out_q[:, :, j] + 2.0 * np.pi * k <= top[j]
+    np.left_shift(1, inside, out=out_turn_ok, dtype=out_turn_ok.dtype)
+    out_turn_ok -= 1
+
+
+def _mod_turn(d: np.ndarray) -> None:
+    """d mod 2π in place, the very values np.mod gives, but one exact add or subtract
+    for the usual d in [−2π, 4π) (np.mod's general remainder is ~10× slower)."""
+    two_pi = 2.0 * np.pi
+    far = (d < -two_pi) | (d >= 2.0 * two_pi)
+    rare = d[far]  # e.g. a held θ4 of many turns
+    low, high = d < 0.0, d >= two_pi
+    np.add(d, two_pi, out=d, where=low)
+    np.subtract(d, two_pi, out=d, where=high)
+    d[far] = np.mod(rare, two_pi)
+
+
+def _statuses(
+    rigid: np.ndarray, ok8: np.ndarray, turn_ok: np.ndarray, sing8: np.ndarray
+) -> np.ndarray:
+    valid = ok8 & np.all(turn_ok != 0, axis=2)
+    status = np.full(ok8.shape[0], IKStatus.UNREACHABLE, dtype=np.int8)
+    status[ok8.any(axis=1)] = IKStatus.BEYOND_LIMITS
+    status[valid.any(axis=1)] = IKStatus.OK
+    status[(valid & sing8).any(axis=1)] = IKStatus.WRIST_SINGULAR
+    status[~rigid] = IKStatus.INVALID_POSE
+    return status
+
+
 def _solve_chunk(
     model: RobotModel,
     T: np.ndarray,
     q_prev: np.ndarray,
     wrist_tol: float,
-    out_q: np.ndarray,
-    out_valid: np.ndarray,
-    out_singular: np.ndarray,
-) -> np.ndarray:
-    """Solve one chunk into the given output views; returns the statuses."""
-    n = T.shape[0]
+    counts: tuple[int, ...],
+    out: Sequence[np.ndarray],
+) -> None:
+    """Solve one chunk with numpy into the given output views (compact form)."""
+    out_q, out_ok, out_turn_ok, out_singular, out_status = out
     rigid = _rigid(T)
     Ts = np.where(rigid[:, None, None], T, np.eye(4))
     q8, ok8, sing8 = _base_branches(model, Ts, q_prev, wrist_tol)
     ok8 &= rigid[:, None]
-    q8 = np.where(ok8[..., None], q8, np.nan)
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
-    # Into [lo, lo + 2π) per axis (starting a hair below lo, so that an angle at a
-    # limit is offered at both ends of a range of a whole number of turns).
-    start = lo - _LIMIT_TOL
-    q8 = start + np.mod(q8 - start, 2.0 * np.pi)
-    # Slots (n, 8, K1, …, K6): each axis's variants broadcast along its own dimension,
-    # and each axis's limits checked on its few variants before combining.
-    counts = turn_counts(model.limits)
-    v = int(np.prod(counts))
-    np.add(q8[:, :, None, :], _turn_table(counts), out=out_q.reshape(n, 8, v, 6))
-    inside = ok8.reshape(n, 8, *([1] * 6))
-    for j, count in enumerate(counts):
-        shape = [1] * 6
-        shape[j] = count
-        turns = (2.0 * np.pi * np.arange(count)).reshape(shape)
-        angle = q8[:, :, j].reshape(n, 8, *([1] * 6)) + turns
-        inside = inside & (angle >= lo[j] - _LIMIT_TOL) & (angle <= hi[j] + _LIMIT_TOL)
-    out_valid[...] = np.broadcast_to(inside, (n, 8, *counts)).reshape(n, 8 * v)
-    out_singular[...] = np.repeat(sing8 & ok8, v, axis=1)
-    status = np.full(n, IKStatus.UNREACHABLE, dtype=np.int8)
-    status[ok8.any(axis=1)] = IKStatus.BEYOND_LIMITS
-    status[out_valid.any(axis=1)] = IKStatus.OK
-    status[(out_valid & out_singular).any(axis=1)] = IKStatus.WRIST_SINGULAR
-    status[~rigid] = IKStatus.INVALID_POSE
-    return status
+    limit_masks(q8, ok8, np.asarray(model.limits), counts, out_q, out_turn_ok)
+    out_ok[...] = ok8
+    np.logical_and(sing8, ok8, out=out_singular)
+    out_status[...] = _statuses(rigid, ok8, out_turn_ok, out_singular)
+
+
+@lru_cache(maxsize=1)
+def _compiled() -> ModuleType | None:
+    """The numba kernel module, or None when numba is not installed (or fails to import)."""
+    if importlib.util.find_spec("numba") is None:
+        return None
+    try:
+        from rapidfix.kinematics import ik_compiled
+    except ImportError:  # e.g. a numba built for another numpy
+        return None
+    return ik_compiled
+
+
+def accelerated() -> bool:
+    """True when the compiled (numba) closed form is available."""
+    return _compiled() is not None
+
+
+def backend_for(model: RobotModel, backend: str | None = None) -> str:
+    """The code that will solve `model`'s closed form: "numba" or "numpy".
+
+    `backend` None reads the environment variable RAPIDFIX_IK_BACKEND (default
+    "auto"). "auto" takes the compiled kernel when numba is importable and the
+    model is nominal (an actual model's refinement is numpy). Asking for "numba"
+    without numba installed raises KinematicsError.
+    """
+    if backend is None:
+        backend = os.environ.get(BACKEND_ENV, "auto").strip().lower() or "auto"
+    if backend not in ("auto", "numpy", "numba"):
+        raise KinematicsError(f"unknown IK backend {backend!r} (auto, numpy, numba)")
+    if backend == "numba" and not accelerated():
+        raise KinematicsError("the numba IK backend needs numba: pip install 'rapidfix[fast]'")
+    if backend == "numpy" or not model.is_nominal:
+        return "numpy"
+    return "numba" if accelerated() else "numpy"
 
 
 def solve_all(
@@ -162,13 +226,16 @@ def solve_all(
     q_prev: np.ndarray | None = None,
     wrist_tol: float = WRIST_TOL,
     chunk: int = CHUNK,
+    backend: str | None = None,
 ) -> IKSolutions:
     """Every solution for poses T (N, 4, 4) (or (4, 4)), tool0 in the base frame.
 
     With `tool` and/or `wobj`, T is the TCP pose in the work-object frame (a
     robtarget) and is first turned into the flange pose. `q_prev` (N, 6) or (6,)
     supplies θ4 at wrist singularities (default 0). Never raises for a bad pose:
-    it gets its status (INVALID_POSE, UNREACHABLE, BEYOND_LIMITS).
+    it gets its status (INVALID_POSE, UNREACHABLE, BEYOND_LIMITS). `backend` picks
+    the closed-form code (see `backend_for`); the numpy path works in chunks of
+    `chunk` poses to keep its temporaries in cache and memory bounded.
     """
     Tb, _ = as_pose_batch(T)
     if tool is not None or wobj is not None:
@@ -177,20 +244,32 @@ def solve_all(
         Tb = flange_target(Tb, tool, wobj)
     n = Tb.shape[0]
     prev = _prev_batch(q_prev, n)
-    offsets = turn_offsets(np.asarray(model.limits))
-    s = 8 * offsets.shape[0]
-    q = np.empty((n, s, 6))
-    valid = np.empty((n, s), dtype=bool)
-    singular = np.empty((n, s), dtype=bool)
-    status = np.empty(n, dtype=np.int8)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        for start in range(0, n, max(1, chunk)):  # chunks bound memory; each is vectorised
-            sl = slice(start, start + chunk)
-            status[sl] = _solve_chunk(
-                model, Tb[sl], prev[sl], wrist_tol, q[sl], valid[sl], singular[sl]
-            )
-    branch = np.repeat(np.arange(8), offsets.shape[0])
-    turns = np.tile(offsets, (8, 1)).astype(int)
+    limits = np.asarray(model.limits)
+    counts = turn_counts(limits)
+    out = (
+        np.empty((n, 8, 6)),
+        np.empty((n, 8), dtype=bool),
+        np.empty((n, 8, 6), dtype=mask_dtype(counts)),
+        np.empty((n, 8), dtype=bool),
+        np.empty(n, dtype=np.int8),
+    )
+    used = backend_for(model, backend)
+    if used == "numba":
+        solver = analytic_solver(model)
+        kernel = _compiled()
+        kernel.solve_nominal(solver, Tb, prev, wrist_tol, limits, counts, LIMIT_TOL, RIGID_TOL, out)
+    else:
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for start in range(0, n, max(1, chunk)):  # bounded temporaries; each vectorised
+                sl = slice(start, start + chunk)
+                _solve_chunk(model, Tb[sl], prev[sl], wrist_tol, counts, [a[sl] for a in out])
+    base_q, reachable, turn_ok, singular, status = out
     return IKSolutions(
-        q=q, valid=valid, status=status, branch=branch, turns=turns, singular=singular
+        base_q=base_q,
+        reachable=reachable,
+        turn_ok=turn_ok,
+        base_singular=singular,
+        status=status,
+        counts=counts,
+        backend=used,
     )

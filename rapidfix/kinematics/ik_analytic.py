@@ -131,8 +131,11 @@ class AnalyticIK:
         t1 = np.where(shoulder_singular, q_prev[:, 0], t1)
         theta1 = np.stack([t1, _wrap(t1 + np.pi)], axis=1)  # (N, 2)
 
-        # Wrist centre target seen from the arm plane: p' = e^{-S1θ1} p.
-        p_arm = rotate_vectors(w[0], -theta1, (p - r[0])[:, None, :]) + r[0]  # (N, 2, 3)
+        # Turn back by θ1 at once (one sine per angle): the wrist centre target, where
+        # axis 6 must point and a vector across it, p' = e^{-S1θ1} p etc.
+        targets = np.stack([p - r[0], RG @ w[5], RG @ self.u_side], axis=1)  # (N, 3, 3)
+        back1 = rotate_vectors(w[0], -theta1[:, :, None], targets[:, None])  # (N, 2, 3, 3)
+        p_arm = back1[:, :, 0] + r[0]  # (N, 2, 3)
 
         # θ3 from the distance axis 2 → wrist centre (subproblem 3), then θ2 (subproblem 1).
         delta = np.sqrt(np.sum((p_arm - r[1]) ** 2, axis=-1))
@@ -143,13 +146,10 @@ class AnalyticIK:
 
         # Wrist: R_w = (R1 R2 R3)ᵀ R_G acting on the axis-6 direction and on a vector
         # across it; turned back joint by joint without building any matrix.
-        def arm_back(v: np.ndarray) -> np.ndarray:
-            v = rotate_vectors(w[0], -theta1, v[:, None, :])[:, :, None, :]
-            v = rotate_vectors(w[1], -theta2, v)
-            return rotate_vectors(w[2], -theta3, v)  # (N, 2, 2, 3)
-
-        v6 = arm_back(RG @ w[5])  # where axis 6 must point, in the arm frame
-        side = arm_back(RG @ self.u_side)
+        pair = back1[:, :, None, 1:]  # (N, 2, 1, 2, 3)
+        pair = rotate_vectors(w[1], -theta2[..., None], pair)
+        pair = rotate_vectors(w[2], -theta3[..., None], pair)  # (N, 2, 2, 2, 3)
+        v6, side = pair[..., 0, :], pair[..., 1, :]  # in the arm frame
         origin = np.zeros(3)
         t4, t5, _ = subproblem2(w[3], w[4], origin, w[5], v6, tol=np.inf)  # (N, 2, 2, 2)
         across = v6 - (v6 @ w[3])[..., None] * w[3]

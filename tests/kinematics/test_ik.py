@@ -7,11 +7,30 @@ from hypothesis import strategies as st
 
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics import IKStatus, available_robots, frames, load_robot
+from rapidfix.kinematics.ik import BACKEND_ENV, accelerated
 from rapidfix.kinematics.ik_result import raise_for_status
 
 pytestmark = pytest.mark.filterwarnings("error")  # no numpy warning may leak
 
 ROBOTS = available_robots()
+# The numpy closed form always; the compiled one too where numba is installed.
+BACKENDS = ["numpy", "numba"] if accelerated() else ["numpy"]
+
+
+@pytest.fixture(scope="module", autouse=True, params=BACKENDS)
+def backend(request):
+    """Run every test of this module on each available IK backend."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv(BACKEND_ENV, request.param)
+        yield request.param
+
+
+def test_the_chosen_backend_ran(backend):
+    robot = load_robot("IRB1600-10/1.45")
+    sols = robot.ik(robot.fk(np.radians([10, 20, 30, 40, 50, 60])))
+    assert sols.backend == backend
+    actual = robot.with_screws(robot.axis_dirs, robot.axis_points + 0.1)
+    assert actual.ik(actual.fk(np.radians([10, 20, 30, 40, 50, 60]))).backend == "numpy"
 
 
 def pose_errors(robot, q, T):
