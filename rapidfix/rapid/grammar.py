@@ -13,9 +13,12 @@ from pathlib import Path
 
 from lark import Lark
 
+from rapidfix.exceptions import RapidfixError
 from rapidfix.rapid.transform import SyntaxBuilder
 
 GRAMMAR_NAME = "rapid.lark"
+#: where a source checkout (or an editable install) keeps the grammar
+SOURCE_TREE_GRAMMAR = Path(__file__).resolve().parents[2] / "grammars" / GRAMMAR_NAME
 
 
 def grammar_text() -> str:
@@ -26,8 +29,13 @@ def grammar_text() -> str:
             return packaged.read_text(encoding="utf-8")
     except (FileNotFoundError, ModuleNotFoundError, NotADirectoryError):
         pass
-    source_tree = Path(__file__).resolve().parents[2] / "grammars" / GRAMMAR_NAME
-    return source_tree.read_text(encoding="utf-8")
+    if SOURCE_TREE_GRAMMAR.is_file():
+        return SOURCE_TREE_GRAMMAR.read_text(encoding="utf-8")
+    raise RapidfixError(
+        f"the RAPID grammar {GRAMMAR_NAME} is missing from the installed package "
+        f"and from the source tree ({SOURCE_TREE_GRAMMAR})",
+        hint="reinstall rapidfix",
+    )
 
 
 @functools.lru_cache(maxsize=1)

@@ -81,16 +81,13 @@ class ModelBuilder:
         self.evaluators: dict[tuple[str, str | None], Evaluator] = {}
         self.name_operands: dict[tuple, tuple] = {}
         self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool]] = []
+        self.spec_keys: dict[str, tuple[str, ...]] = {}  # instruction -> lower-case parameters
 
     # ------------------------------------------------------------ pass 1
     def _declaration(self, decl: s.DataDecl, module: str, routine: str | None) -> Declaration:
-        init = decl.init
         return Declaration(
             name=decl.name, type_name=decl.type_name, storage=decl.storage, module=module,
-            routine=routine, span=self.program.span(decl.start, decl.end),
-            name_span=self.program.span(decl.name_start, decl.name_start + len(decl.name)),
-            value_span=None if init is None else self.program.span(init.start, init.end),
-            syntax=decl, local=decl.local, task=decl.task,
+            routine=routine, syntax=decl, source=self.source, local=decl.local, task=decl.task,
         )
 
     def _collect(self) -> None:
@@ -242,7 +239,7 @@ class ModelBuilder:
         routine = decl.routine.lower() if decl.routine else None
         evaluator = self._evaluator(module, routine)
         try:
-            dims = tuple(evaluator.value(d) for d in decl.syntax.dims)
+            dims = tuple(evaluator.value(d) for d in decl.syntax.dims) if decl.syntax.dims else ()
             decl.dims = tuple(int(d) for d in dims
                               if isinstance(d, float) and d == int(d) and d >= 0)
             if len(decl.dims) != len(dims):
@@ -274,19 +271,27 @@ class ModelBuilder:
 
     def _operand(self, arg: s.Argument, type_hint: str | None, module: str,
                  routine: str | None) -> Operand:
-        program = self.program
         expr = arg.value
-        span = program.span(arg.start, arg.end)
         if expr is None:
             form = "switch" if arg.kind == "optional" else "conditional"
-            return Operand(arg, span, None, "", form, static=arg.kind == "optional",
+            return Operand(arg, self.source, "", form, static=arg.kind == "optional",
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
+        if isinstance(expr, s.NameRef):
+            # the same speed, zone, tool or target name recurs on many lines
+            cache_key = (module, routine, expr.name, type_hint)  # as spelt: no lower()
+            cached = self.name_operands.get(cache_key)
+            if cached is None:
+                value, type_name, static, reason = self._evaluate_operand(
+                    expr, type_hint, module, routine)
+                cached = self.name_operands[cache_key] = (
+                    type_name, value, static, reason,
+                    self._declaration_named(expr, module, routine))
+            # a name's text is its node's string, shared by every use of the name
+            return Operand(arg, self.source, expr.name, "name", expr.name, *cached)
         text = self.source.text[expr.start:expr.end]
         base = expr
-        if isinstance(expr, s.NameRef):
-            form = "name"
-        elif isinstance(expr, (s.Aggregate, s.NumericAggregate)):
+        if isinstance(expr, (s.Aggregate, s.NumericAggregate)):
             form = "inline"
         elif isinstance(expr, s.Call) and expr.key in ("offs", "reltool"):
             form = expr.key
@@ -295,23 +300,18 @@ class ModelBuilder:
         else:
             form = "expression"
         name_ref = base if isinstance(base, s.NameRef) else None
-        operand = Operand(arg, span, program.span(expr.start, expr.end), text, form,
+        operand = Operand(arg, self.source, text, form,
                           name=name_ref.name if name_ref else None, type_name=type_hint)
         if name_ref is not None:
-            found = self._find(name_ref.key, module, routine)
-            if isinstance(found, Declaration):
-                operand.declaration = found
-        if form == "name":
-            # the same speed, zone, tool or target name recurs on many lines
-            cache_key = (module, routine, name_ref.key, type_hint)
-            cached = self.name_operands.get(cache_key)
-            if cached is None:
-                cached = self.name_operands[cache_key] = self._evaluate_operand(
-                    expr, type_hint, module, routine)
-        else:
-            cached = self._evaluate_operand(expr, type_hint, module, routine)
+            operand.declaration = self._declaration_named(name_ref, module, routine)
+        cached = self._evaluate_operand(expr, type_hint, module, routine)
         operand.value, operand.type_name, operand.static, operand.reason = cached
         return operand
+
+    def _declaration_named(self, name_ref: s.NameRef, module: str,
+                           routine: str | None) -> Declaration | None:
+        found = self._find(name_ref.key, module, routine)
+        return found if isinstance(found, Declaration) else None
 
     def _evaluate_operand(self, expr: s.Expr, type_hint: str | None, module: str,
                           routine: str | None) -> tuple[object, str | None, bool, str | None]:
@@ -333,6 +333,9 @@ class ModelBuilder:
     def _motion(self, call: s.ProcedureCall, spec: MotionSpec, module: str, routine: str,
                 in_loop: bool) -> MotionInstruction:
         rkey = routine.lower()
+        keys = self.spec_keys.get(spec.name)
+        if keys is None:
+            keys = self.spec_keys[spec.name] = tuple(p.lower() for p in spec.parameters)
         arguments: dict[str, Operand] = {}
         optional: dict[str, Operand] = {}
         index = 0
@@ -340,8 +343,8 @@ class ModelBuilder:
             if arg.kind == "required":
                 if arg.name is not None:
                     key = arg.name.lower()
-                elif index < len(spec.parameters):
-                    key = spec.parameters[index].lower()
+                elif index < len(keys):
+                    key = keys[index]
                 else:
                     key = f"#{index + 1}"
                 index += 1
@@ -349,12 +352,10 @@ class ModelBuilder:
             else:
                 key = arg.key or ""
                 optional[key] = self._operand(arg, _ROLE_TYPES.get(key), module, rkey)
-        program = self.program
         return MotionInstruction(
             name=call.name, spec=spec, module=self._module_name(module), routine=routine,
-            span=program.span(call.start, call.end),
-            name_span=program.span(call.start, call.start + len(call.name)),
-            syntax=call, arguments=arguments, optional=optional, in_loop=in_loop,
+            syntax=call, source=self.source, arguments=arguments, optional=optional,
+            in_loop=in_loop,
         )
 
     def _module_name(self, key: str) -> str:

@@ -10,7 +10,7 @@ from pathlib import Path
 from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.grammar import rapid_parser
+from rapidfix.rapid.fastpath import parse_text
 from rapidfix.rapid.model_builder import build_program
 from rapidfix.rapid.program import Program
 from rapidfix.rapid.source import SourceText, decode_source
@@ -37,7 +37,7 @@ def _cyclic_gc_paused() -> Iterator[None]:
 def parse_source(source: SourceText) -> s.SourceFile:
     """The syntax tree of decoded source; raises RapidSyntaxError."""
     try:
-        return rapid_parser().parse(source.text)
+        return parse_text(source.text)
     except UnexpectedInput as err:
         raise explain(source, err) from None
 

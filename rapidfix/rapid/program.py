@@ -18,7 +18,7 @@ from rapidfix.rapid.span import Span
 from rapidfix.rapid.values import TARGET_TYPES, Value, ValueShapeError, typed_value
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class Declaration:
     """A data declaration (`CONST robtarget p10 := [...];`), module or routine level.
 
@@ -32,10 +32,8 @@ class Declaration:
     storage: str  # 'CONST' | 'VAR' | 'PERS'
     module: str
     routine: str | None
-    span: Span  # whole declaration, up to and including ';'
-    name_span: Span
-    value_span: Span | None  # the initial value expression
     syntax: s.DataDecl = field(repr=False)
+    source: SourceText = field(repr=False)
     local: bool = False
     task: bool = False
     dims: tuple[int, ...] = ()
@@ -50,6 +48,24 @@ class Declaration:
     @property
     def type_key(self) -> str:
         return self.type_name.lower()
+
+    # Spans are made when asked, from the syntax node: a CAM program has
+    # hundreds of thousands of declarations.
+    @property
+    def span(self) -> Span:
+        """The whole declaration, up to and including ';'."""
+        return Span(self.syntax.start, self.syntax.end, self.source)
+
+    @property
+    def name_span(self) -> Span:
+        start = self.syntax.name_start
+        return Span(start, start + len(self.syntax.name), self.source)
+
+    @property
+    def value_span(self) -> Span | None:
+        """The initial value expression (None without one)."""
+        init = self.syntax.init
+        return None if init is None else Span(init.start, init.end, self.source)
 
     @property
     def is_target(self) -> bool:
@@ -67,7 +83,7 @@ class Declaration:
             return None
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class Operand:
     """One argument of an instruction, with its value when it is known.
 
@@ -76,8 +92,7 @@ class Operand:
     """
 
     argument: s.Argument = field(repr=False)
-    span: Span  # the whole argument, including `\Name:=` for optional ones
-    value_span: Span | None  # the expression only
+    source: SourceText = field(repr=False)
     text: str  # source text of the expression
     form: str
     name: str | None = None  # the data name for form 'name' (and Offs/RelTool base)
@@ -86,6 +101,18 @@ class Operand:
     static: bool = False
     reason: str | None = None
     declaration: Declaration | None = field(default=None, repr=False)
+
+    # Spans are made when asked: a CAM program has millions of operands.
+    @property
+    def span(self) -> Span:
+        """The whole argument, including `\\Name:=` for optional ones."""
+        return Span(self.argument.start, self.argument.end, self.source)
+
+    @property
+    def value_span(self) -> Span | None:
+        """The expression only (None for a switch or a conditional argument)."""
+        value = self.argument.value
+        return None if value is None else Span(value.start, value.end, self.source)
 
     @property
     def data(self) -> Any:
@@ -98,7 +125,7 @@ class Operand:
             return None
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class MotionInstruction:
     """A call of a motion instruction (MoveL, MoveAbsJ, TriggC, ...)."""
 
@@ -106,12 +133,21 @@ class MotionInstruction:
     spec: MotionSpec = field(repr=False)
     module: str
     routine: str
-    span: Span  # whole statement including ';'
-    name_span: Span
     syntax: s.ProcedureCall = field(repr=False)
+    source: SourceText = field(repr=False)
     arguments: dict[str, Operand]  # required parameters by lower-case spec name
     optional: dict[str, Operand]  # optional arguments by lower-case name
     in_loop: bool = False
+
+    @property
+    def span(self) -> Span:
+        """The whole statement, including ';'."""
+        return Span(self.syntax.start, self.syntax.end, self.source)
+
+    @property
+    def name_span(self) -> Span:
+        start = self.syntax.start
+        return Span(start, start + len(self.syntax.name), self.source)
 
     @property
     def targets(self) -> list[Operand]:

@@ -9,6 +9,7 @@ a known type into one of the dataclasses below (quaternions [w, x, y, z]).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import repeat
 from typing import Any
 
 Value = Any  # float | bool | str | tuple[Value, ...]
@@ -111,7 +112,7 @@ class ValueShapeError(ValueError):
 def _nums(value: Value, n: int) -> tuple[float, ...]:
     if not isinstance(value, tuple) or len(value) != n:
         raise ValueShapeError(f"expected {n} numbers, got {value!r}")
-    if not all(isinstance(v, float) and not isinstance(v, bool) for v in value):
+    if not all(map(isinstance, value, repeat(float))):  # (a bool is never a float)
         raise ValueShapeError(f"expected {n} numbers, got {value!r}")
     return value
 
@@ -142,7 +143,7 @@ def to_pose(value: Value) -> Pose:
 def to_robtarget(value: Value) -> RobTarget:
     trans, rot, conf, extax = _parts(value, 4)
     return RobTarget(_nums(trans, 3), _nums(rot, 4),
-                     tuple(int(c) for c in _nums(conf, 4)), _nums(extax, 6))
+                     tuple(map(int, _nums(conf, 4))), _nums(extax, 6))
 
 
 def to_jointtarget(value: Value) -> JointTarget:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from rapidfix.rapid import load_program
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.grammar import grammar_text
@@ -69,4 +71,15 @@ def test_installed_package_grammar_is_preferred(tmp_path, monkeypatch):
     monkeypatch.setattr(grammar.resources, "files", lambda name: package)
     assert grammar.grammar_text() == "// packaged copy\n"
     (package / "grammars" / "rapid.lark").unlink()
+    monkeypatch.setattr(grammar, "SOURCE_TREE_GRAMMAR", REPO / "grammars" / "rapid.lark")
     assert grammar.grammar_text().startswith("// ABB RAPID")
+
+
+def test_missing_grammar_is_a_clear_error(tmp_path, monkeypatch):
+    from rapidfix.exceptions import RapidfixError
+    from rapidfix.rapid import grammar
+
+    monkeypatch.setattr(grammar.resources, "files", lambda name: tmp_path)
+    monkeypatch.setattr(grammar, "SOURCE_TREE_GRAMMAR", tmp_path / "nowhere" / "rapid.lark")
+    with pytest.raises(RapidfixError, match=r"grammar rapid\.lark is missing"):
+        grammar.grammar_text()

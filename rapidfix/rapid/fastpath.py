@@ -1,0 +1,290 @@
+"""Whole-run tokens for the simple statements that make up large programs.
+
+A CAM program is almost entirely lines of two shapes,
+`CONST robtarget p1:=[[...],[...],[...],[...]];` and
+`MoveL p1,v100,z1,tool\\WObj:=wobj;`. Lark's pure-Python LALR parser spends
+microseconds on every token and every reduction, and such a line has up to a
+dozen tokens and fifty reductions. This module adds two terminals to the
+grammar, each matching a whole run of such statements at once:
+
+- FAST_DECLS: declarations `[LOCAL] [TASK] VAR|PERS|CONST type name [:= value];`
+- FAST_CALLS: procedure calls `Name [arg {, arg}];`, each argument a value or
+  `\\Name[:=value]` (an optional argument, with or without a comma before it),
+
+a value being a name, an unsigned number or an all-numeric aggregate of up to
+two levels, with only whitespace between the pieces. The callbacks split a token
+into exactly the syntax nodes the grammar's own rules build (same node types,
+offsets and values), so nothing downstream can tell the difference. Anything
+else in a statement — a comment, an expression, a keyword, a string, a named or
+conditional argument — ends the run, and that statement is parsed by the full
+grammar as before.
+
+Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
+added where the grammar allows a statement or a declaration, whose nodes Lark
+splices into the enclosing list as it does for every rule named with `_`; the
+contextual lexer offers the terminals only where such a run may start.
+`grammars/rapid.lark` stays the definition of the language: whenever the fast
+parser fails, the plain parser decides (parse_text), and syntax errors are
+explained by the plain grammar (rapidfix.rapid.syntax_errors), so messages and
+positions do not depend on this module.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+import sys
+from typing import Any
+
+from lark import Lark, Tree, v_args
+from lark.exceptions import UnexpectedInput
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
+from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_value
+
+# Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
+_WS = r"[ \t\f\v\r\n\x1a]"
+_WORD_END = r"(?![A-Za-z0-9_])"
+# An aggregate of numbers, up to two levels deep and without spaces, matched loosely
+# for speed; its numbers are checked when they are read (_number_group).
+_LOOSE_AGGREGATE = r"\[(?:[-+0-9.eE,]|\[[-+0-9.eE,]*\])*\]"
+# The same, for splitting a token whose syntax has been checked already.
+_VALUE_TEXT = r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]|[A-Za-z0-9_.+\-]+"
+
+
+class NotFast(Exception):
+    """A fast token held something the fast path does not read exactly (an
+    aggregate with a malformed number or of mixed depth); parse_text then parses
+    the whole file with the plain grammar."""
+
+
+def _keywords() -> dict[str, str]:
+    """Keyword terminal name -> its text (`ENDPROC` -> 'ENDPROC')."""
+    return {t.name: t.pattern.value for t in diagnosis_parser().terminals
+            if t.pattern.type == "str" and t.pattern.value.isalpha()}
+
+
+def _keywords_after(prefix: str) -> list[str]:
+    """The keywords the plain parser accepts right after `prefix`; elsewhere the
+    contextual lexer reads the same letters as a NAME."""
+    interactive = diagnosis_parser().parse_interactive(prefix)
+    interactive.exhaust_lexer()
+    keywords = _keywords()
+    return [keywords[t] for t in interactive.accepts() if t in keywords]
+
+
+def _name(excluded: list[str]) -> str:
+    """The NAME terminal, refusing the `excluded` keywords (grouped by first letter)."""
+    name = f"[A-Za-z][A-Za-z0-9_]*{_WORD_END}"
+    if not excluded:
+        return name
+    by_letter: dict[str, list[str]] = {}
+    for word in sorted({w.upper() for w in excluded}, key=len, reverse=True):
+        by_letter.setdefault(word[0], []).append(re.escape(word[1:]))
+    alternatives = "|".join(f"{first}(?:{'|'.join(rest)})" for first, rest in by_letter.items())
+    return f"(?!(?i:{alternatives}){_WORD_END}){name}"
+
+
+@functools.lru_cache(maxsize=1)
+def _patterns() -> dict[str, str]:
+    """Regular expressions of the fast terminals."""
+    terminals = {t.name: t for t in diagnosis_parser().terminals}
+    if terminals["NAME"].pattern.to_regexp() != "(?i:[a-z][a-z0-9_]*)":  # pragma: no cover
+        raise ValueError("rapid.lark's NAME changed; update rapidfix.rapid.fastpath")
+    call_name = _name(list(_keywords().values()))
+    plain_name = _name(_keywords_after("MODULE m\nPROC p()\nx \\"))
+    type_name = _name(_keywords_after("MODULE m\nVAR "))
+    data_name = _name(_keywords_after("MODULE m\nVAR num "))
+    value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
+    number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
+    value = f"(?:{_LOOSE_AGGREGATE}|{number}|{value_name})"
+    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{value})?"
+    argument = f"(?:{value}|{optional})"
+    following = f"(?:,{_WS}*{value}|(?:,{_WS}*)?{optional})"
+    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following})*)?{_WS}*;"
+    decl = (f"(?i:(?:LOCAL{_WS}+)?(?:TASK{_WS}+)?(?:VAR|PERS|CONST)){_WS}+{type_name}{_WS}+"
+            f"{data_name}{_WS}*(?::={_WS}*{value}{_WS}*)?;")
+    return {"call": call, "decl": decl}
+
+
+_BODY_RULE = "_body: (data_decl | _statement)*"
+
+
+def grammar_extension(grammar: str) -> str:
+    """Lark grammar text that adds the fast terminals to the rules of `grammar`.
+
+    A run of declarations may stand wherever a declaration may, so `_body` is
+    restated with it; the check below keeps that in step with rapid.lark.
+    """
+    if _BODY_RULE not in grammar:  # pragma: no cover - guards a change of rapid.lark
+        raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
+    p = _patterns()
+    calls = f"{p['call']}(?:{_WS}*{p['call']})*"
+    decls = f"{p['decl']}(?:{_WS}*{p['decl']})*"
+    if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
+        raise ValueError("a terminal pattern holds '/'")
+    return (
+        "\n%extend _statement: _fast_calls\n"
+        "%extend _module_item: _fast_decls\n"
+        "%override _body: (data_decl | _fast_decls | _statement)*\n"
+        "_fast_calls: FAST_CALLS\n"
+        "_fast_decls: FAST_DECLS\n"
+        f"FAST_CALLS.9: /{calls}/\n"
+        f"FAST_DECLS.9: /{decls}/\n"
+    )
+
+
+# Splitting a token whose syntax the lexer has checked: one piece of a run of
+# calls is an optional argument, a value (or the next call's name) or the ';'.
+_CALL_PIECE = re.compile(
+    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_VALUE_TEXT}))?"
+    rf"|({_VALUE_TEXT})|(;))"
+)
+_DECL = re.compile(
+    rf"{_WS}*(?:(?i:(LOCAL)){_WS}+)?(?:(?i:(TASK)){_WS}+)?((?i:VAR|PERS|CONST)){_WS}+"
+    rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
+    rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
+)
+
+# Groups of numbers recur in CAM programs ([0,0,0,0], [9E+09,...]); read each once.
+_GROUP_CACHE: dict[str, tuple[float, ...]] = {}
+_GROUP_CACHE_LIMIT = 65536
+
+
+def _number_group(text: str) -> tuple[float, ...]:
+    """'1,-2.5,9E+09' -> (1.0, -2.5, 9e9). The loose lexer pattern let through only
+    the characters -+0-9.eE, and of such strings float() takes exactly those that
+    RAPID's number syntax takes; anything else raises NotFast."""
+    try:
+        value = tuple(map(float, text.split(",")))
+    except ValueError:
+        raise NotFast(text) from None
+    if len(_GROUP_CACHE) < _GROUP_CACHE_LIMIT:
+        _GROUP_CACHE[text] = value
+    return value
+
+
+@functools.lru_cache(maxsize=1)
+def _exact_aggregate() -> re.Pattern[str]:
+    terminal = next(t for t in diagnosis_parser().terminals if t.name == "NUMERIC_AGGREGATE")
+    return re.compile(terminal.pattern.to_regexp())
+
+
+def aggregate_value(text: str) -> tuple:
+    """The value of a loosely matched numeric aggregate, as the grammar's
+    NUMERIC_AGGREGATE would give it (see transform.numeric_aggregate_value)."""
+    body = text[1:-1]
+    if "[" not in body:
+        return _GROUP_CACHE.get(body) or _number_group(body)
+    if body[0] == "[" and body[-1] == "]":
+        inner = body[1:-1]
+        groups = inner.split("],[")
+        if inner.count("[") == len(groups) - 1 == inner.count("]"):  # only groups
+            cached = _GROUP_CACHE.get
+            return tuple([cached(g) or _number_group(g) for g in groups])
+    if _exact_aggregate().fullmatch(text):  # numbers and groups mixed: [1.8,[0,0,40],...]
+        return numeric_aggregate_value(text)
+    raise NotFast(text)
+
+
+def _value_node(text: str, start: int) -> s.Expr:
+    """The node the grammar builds for a name, number or numeric aggregate at `start`."""
+    end = start + len(text)
+    first = text[0]
+    if first == "[":
+        return s.NumericAggregate(start, end, aggregate_value(text))
+    if first.isdigit() or first == ".":
+        return s.Number(start, end, _number(text), text)
+    return s.NameRef(start, end, sys.intern(text))
+
+
+def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
+    """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
+
+    Names are interned: a CAM program repeats the same few instruction, speed,
+    zone, tool and work object names on every line.
+    """
+    calls: list[s.ProcedureCall] = []
+    name: str | None = None
+    start = 0
+    args: list[s.Argument] = []
+    argument, procedure_call, name_ref, intern = s.Argument, s.ProcedureCall, s.NameRef, sys.intern
+    for piece in _CALL_PIECE.finditer(text):
+        slash, option, option_value, value, semi = piece.groups()
+        if value is not None:
+            at = base + piece.start(4)
+            if name is None:
+                name, start, args = intern(value), at, []
+            elif value[0].isalpha():
+                end = at + len(value)
+                args.append(argument(at, end, "required", None, name_ref(at, end, intern(value))))
+            else:
+                node = _value_node(value, at)
+                args.append(argument(at, node.end, "required", None, node))
+        elif slash is not None:
+            node = None if option_value is None else _value_node(
+                option_value, base + piece.start(3))
+            args.append(argument(base + piece.start(1), base + piece.end(), "optional",
+                                 intern(option), node))
+        elif semi is not None:
+            calls.append(procedure_call(start, base + piece.end(), name, args))
+            name = None
+    return calls
+
+
+def split_decls(text: str, base: int) -> list[s.DataDecl]:
+    """The DataDecl nodes of a FAST_DECLS token starting at offset `base`."""
+    decls: list[s.DataDecl] = []
+    for m in _DECL.finditer(text):
+        local, task, storage, type_name, name, value = m.groups()
+        first = 1 if local is not None else 2 if task is not None else 3
+        init = None if value is None else _value_node(value, base + m.start(6))
+        decls.append(s.DataDecl(
+            base + m.start(first), base + m.end(), storage.upper(), type_name, name,
+            base + m.start(5), [], init, local is not None, task is not None,
+        ))
+    return decls
+
+
+@v_args(inline=True)
+class FastSyntaxBuilder(SyntaxBuilder):
+    """SyntaxBuilder plus the callbacks of the fast terminals."""
+
+    # Rules named with '_' are inlined: Lark splices the children of the Tree
+    # they return into the enclosing statement or module item list.
+    def _fast_calls(self, children: list[Any]) -> Tree:
+        tok = children[0]
+        return Tree("_fast_calls", split_calls(str(tok), tok.start_pos))
+
+    def _fast_decls(self, children: list[Any]) -> Tree:
+        tok = children[0]
+        return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
+
+
+@functools.lru_cache(maxsize=1)
+def fast_parser() -> Lark:
+    """The grammar's LALR parser with the fast terminals, building syntax nodes directly."""
+    grammar = grammar_text()
+    return Lark(
+        grammar + grammar_extension(grammar),
+        parser="lalr",
+        lexer="contextual",
+        transformer=FastSyntaxBuilder(),
+        cache=True,
+    )
+
+
+def parse_text(text: str) -> s.SourceFile:
+    """The syntax tree of `text`, from the fast parser when it reads the file
+    exactly, else from the plain one.
+
+    The fast parser gives up on an aggregate it does not read exactly (NotFast)
+    and on any syntax error: the contextual lexer may offer a fast token where
+    the LALR table merged states, and the plain parser then decides. Its
+    UnexpectedInput passes on for rapidfix.rapid.syntax_errors to explain.
+    """
+    try:
+        return fast_parser().parse(text)
+    except (NotFast, UnexpectedInput):
+        return rapid_parser().parse(text)

@@ -1,0 +1,258 @@
+"""The fast path (whole-run tokens) builds exactly the syntax tree of the plain grammar.
+
+Every comparison parses the same text with rapid.lark alone and with the fast
+terminals added, and compares the trees node by node (types, offsets, values).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from lark.exceptions import UnexpectedInput
+
+from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid import parse_program
+from rapidfix.rapid.fastpath import NotFast, aggregate_value, fast_parser, parse_text
+from rapidfix.rapid.grammar import rapid_parser
+from rapidfix.rapid.source import decode_source
+from rapidfix.rapid.transform import numeric_aggregate_value
+
+UNUSED = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+TARGET = f"[[1,-2.5,3E2],[1,0,0,0],[0,-1,2,0],{UNUSED}]"
+
+
+def shape(node: object) -> object:
+    """A syntax tree as nested tuples: node type, then every field."""
+    if dataclasses.is_dataclass(node):
+        return (
+            type(node).__name__,
+            *(shape(getattr(node, f.name)) for f in dataclasses.fields(node)),
+        )
+    if isinstance(node, (list, tuple)):
+        return tuple(shape(item) for item in node)
+    return node
+
+
+def plain_tree(text: str) -> object:
+    return shape(rapid_parser().parse(text))
+
+
+def module(*lines: str, newline: str = "\n") -> str:
+    return newline.join(["MODULE M", *lines, "ENDMODULE", ""])
+
+
+def routine(*lines: str) -> str:
+    return module("PROC main()", *("  " + line for line in lines), "ENDPROC")
+
+
+def test_every_sample_takes_the_fast_path_to_the_same_tree(rapid_samples):
+    for path in rapid_samples:
+        text = decode_source(path.read_bytes(), str(path)).text
+        assert shape(fast_parser().parse(text)) == plain_tree(text), path.name
+
+
+FAST = {
+    "moves": routine("MoveL p1,v100,z1,tool0\\WObj:=wobj1;", "MoveJ p2, v200, fine, tool0;"),
+    "switch first, no comma before an option": routine(
+        "MoveL \\Conc, p1, v100, z10, tool0 \\WObj:=w1;", "MoveL p1, v100, z10, tool0\\Conc;"
+    ),
+    "spread over lines": routine("MoveL p1,\n    v100,\r\n    z1, tool0 \\WObj:=w;"),
+    "CRLF and Ctrl-Z": module(
+        "PROC main()", "  MoveL p1,v100,z1,tool0;\x1a", "ENDPROC", newline="\r\n"
+    ),
+    "inline targets": routine(
+        f"MoveL {TARGET},v100,z1,tool0;", f"MoveC {TARGET}, {TARGET}, v100, z1, tool0;"
+    ),
+    "numbers": routine("Foo 0x1F, 0b101, 0o17, .5, 9E+09, 1.5e-3, 2.;", "WaitTime 0.5;"),
+    "no arguments": routine("Stop;", "Path_10;", "ENDPROCx;"),
+    "keywords as plain names": routine("MoveL Step, v100, z1, tool0 \\WObj:=Default;"),
+    "module data": module(
+        "CONST robtarget p1:=" + TARGET + ";",
+        "const robtarget p2 := " + TARGET + " ;",
+        "LOCAL PERS num n:=3;",
+        "TASK VAR num k;",
+        "LOCAL TASK PERS num m := k;",
+        "VAR robtarget p3;",
+        "PERS loaddata l:=[1.8,[0,0,40],[1,0,0,0],0,0,0];",
+        "CONST speeddata v:=[40,500,5000,1000];",
+    ),
+    "routine data": routine(
+        "VAR num i;", "VAR num j:=2;", "CONST num k := 5;", "Foo i;", "VAR num late:=1;"
+    ),
+    "nested bodies": routine(
+        "IF a THEN",
+        "  Foo 1;",
+        "  Bar;",
+        "ELSEIF b THEN",
+        "  Baz;",
+        "ELSE",
+        "  Qux;",
+        "ENDIF",
+        "FOR i FROM 1 TO 3 DO",
+        "  Foo i;",
+        "ENDFOR",
+        "WHILE c DO",
+        "  Foo;",
+        "ENDWHILE",
+        "TEST n",
+        "CASE 1, 2:",
+        "  Foo;",
+        "DEFAULT:",
+        "  Bar;",
+        "ENDTEST",
+    ),
+    "handlers": module(
+        "PROC main()",
+        "  Foo;",
+        "ERROR",
+        "  Bar;",
+        "  RETRY;",
+        "UNDO",
+        "  Baz;",
+        "ENDPROC",
+        "FUNC num f()",
+        "  Foo;",
+        "  RETURN 1;",
+        "ERROR (1, 2)",
+        "  Bar;",
+        "  TRYNEXT;",
+        "ENDFUNC",
+    ),
+}
+
+MIXED = {
+    "statement keywords in a run": routine(
+        "Foo;", "EXIT;", "Bar;", "RETURN;", "Baz;", "GOTO lbl;", "lbl:", "Qux;"
+    ),
+    "expression arguments": routine(
+        "Foo TRUE, FALSE;", "Foo NOT b;", "Foo a + 1;", "Foo -1;", 'TPWrite "x";', "Foo p.x, a{2};"
+    ),
+    "named and conditional arguments": routine(
+        "MoveL ToPoint:=p1, v100, z1, tool0;", "Foo \\A?B;", "Foo \\A:=1+2;"
+    ),
+    "comments inside and between": routine(
+        "MoveL p1, v100, ! note\n z1, tool0;", "Foo; ! after", "! line", "Bar;"
+    ),
+    "other aggregates": routine(
+        "Foo [ 1, 2 ];", "Foo [[[1]]];", "Foo [1,[2,3]];", "Foo [a, 1];", "Foo Offs(p1, 0, 0, 10);"
+    ),
+    "other data": module(
+        "CONST num n := -1;",
+        'CONST string s := "x";',
+        "VAR num a{3} := [1,2,3];",
+        "CONST bool b := TRUE;",
+        "CONST num m := n * 2;",
+    ),
+    "compact IF and assignments": routine(
+        "IF a MoveL p1, v100, z1, tool0;", "x := 1;", "IF a Foo;", "Foo;", '%"name"% 1;'
+    ),
+}
+
+
+@pytest.mark.parametrize("name", sorted(FAST))
+def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
+    text = FAST[name]
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("name", sorted(MIXED))
+def test_other_statements_parse_to_the_same_tree(name):
+    text = MIXED[name]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+def test_a_bad_number_in_an_aggregate_falls_back_and_is_reported():
+    text = routine("MoveL [[1.2.3,0,0],[1,0,0,0],[0,0,0,0]," + UNUSED + "],v100,z1,tool0;")
+    with pytest.raises(NotFast):
+        fast_parser().parse(text)
+    with pytest.raises(RapidSyntaxError) as err:
+        parse_program(text, "bad.mod")
+    assert err.value.file == "bad.mod" and err.value.line == 3
+
+
+def test_errors_are_those_of_the_plain_grammar():
+    text = routine("MoveL p1,v100,z1,tool0;", "MoveL p2,v100 z1,tool0;", "MoveL p3,v1,z1,t;")
+    with pytest.raises(RapidSyntaxError) as err:
+        parse_program(text, "cam.mod")
+    assert (err.value.line, err.value.column) == (4, 17)
+    assert "unexpected 'z1'" in err.value.message
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "[1,2,3]",
+        "[[1,2],[3]]",
+        "[1.8,[0,0,40],[1,0,0,0],0,0,0]",
+        "[[1e3,-2.5E-2,+.5,7.]]",
+        "[[1],2]",
+    ],
+)
+def test_aggregate_values_match_the_grammar_reader(text):
+    assert aggregate_value(text) == numeric_aggregate_value(text)
+
+
+@pytest.mark.parametrize("text", ["[1.2.3]", "[1,,2]", "[[1,2],,[3]]", "[-]", "[1e]", "[[],1]"])
+def test_malformed_aggregates_are_left_to_the_grammar(text):
+    with pytest.raises(NotFast):
+        aggregate_value(text)
+
+
+PIECES = [
+    "MoveL p1,v100,z1,tool0;",
+    "MoveL p2, v200, fine, tool0 \\WObj:=w;",
+    "Stop;",
+    f"MoveJ {TARGET},v100,z1,tool0;",
+    "Foo 1, 0x1F;",
+    "EXIT;",
+    "x := 1;",
+    "Foo TRUE;",
+    "IF a Foo;",
+    "lbl:",
+    "Foo \\A?B;",
+    "MoveL p1, ! c\n v1, z1, t;",
+    "Foo [1,,2];",
+    "Foo p1 v1;",
+    "RETURN;",
+    "Foo [[1,2],3];",
+    "Foo ;;",
+    "Bar",
+]
+DATA = [
+    f"CONST robtarget p:={TARGET};",
+    "VAR num i;",
+    "LOCAL PERS num n:=2;",
+    "CONST num m:=-1;",
+    "VAR num a{2};",
+    "CONST num q:=[1,2.3.4];",
+]
+GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]
+
+
+@st.composite
+def program_text(draw: st.DrawFn) -> str:
+    data = draw(st.lists(st.sampled_from(DATA), max_size=4))
+    body = draw(st.lists(st.sampled_from(PIECES + DATA[:3]), max_size=10))
+    gap = st.sampled_from(GAPS)
+    return (
+        "MODULE M"
+        + "".join(draw(gap) + "\n" + d for d in data)
+        + "\nPROC main()"
+        + "".join(draw(gap) + b for b in body)
+        + "\nENDPROC\nENDMODULE"
+    )
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(program_text())
+def test_random_programs_parse_as_with_the_plain_grammar(text):
+    try:
+        expected = plain_tree(text)
+    except UnexpectedInput:
+        with pytest.raises(UnexpectedInput):
+            parse_text(text)
+        return
+    assert shape(parse_text(text)) == expected
