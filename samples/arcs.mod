@@ -5,8 +5,8 @@ MODULE GlueBead
   TASK PERS wobjdata wPart:=[FALSE,TRUE,"",[[700,0,420],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
   CONST num nR:=20;
   CONST num nLength:=2 * 80 + 40;
-  CONST robtarget pCorner:=[[0,0,0],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-  CONST robtarget pStart:=[[nR,0,0],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pCorner:=[[0,0,0],[0,0,1,0],[0,-1,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pStart:=[[nR,0,0],[0,0,1,0],[0,0,-1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
   LOCAL CONST num nCos45:=0.7071068;
 
   PROC Bead()

@@ -13,10 +13,10 @@ MODULE CellMain
   CONST zonedata zPick:=[FALSE,2,3,3,0.3,3,0.3];
 
   CONST jointtarget jHome:=[[0,-20,30,0,80,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-  CONST robtarget pInfeedAbove:=[[120,85,150],[0,0,1,0],[-1,0,-1,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-  CONST robtarget pInfeedPick:=[[120,85,0],[0,0,1,0],[-1,0,-1,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-  CONST robtarget pChuck:=[[0,0,0],[0.5,-0.5,0.5,0.5],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
-  CONST robtarget pChuckOut:=[[-180,0,0],[0.5,-0.5,0.5,0.5],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pInfeedAbove:=[[120,85,150],[0,0,1,0],[-1,0,-2,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pInfeedPick:=[[120,85,0],[0,0,1,0],[-1,0,-2,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pChuck:=[[0,0,0],[0.5,-0.5,0.5,0.5],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget pChuckOut:=[[-180,0,0],[0.5,-0.5,0.5,0.5],[0,-1,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
   PERS robtarget pOutfeed:=[[610.5,-520,402],[0,0.7071068,0.7071068,0],[-1,-1,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
   VAR robtarget pCurrent;
   VAR num nParts:=0;

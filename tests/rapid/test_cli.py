@@ -44,7 +44,7 @@ def test_targets_csv(rapid_samples, capsys):
     by_name = {r["name"]: r for r in rows}
     assert by_name["pInfeedPick"]["kind"] == "robtarget"
     assert by_name["pInfeedPick"]["static"] == "yes"
-    assert by_name["pInfeedPick"]["value"].startswith("[[120,85,0],[0,0,1,0],[-1,0,-1,0]")
+    assert by_name["pInfeedPick"]["value"].startswith("[[120,85,0],[0,0,1,0],[-1,0,-2,0]")
     assert by_name["jHome"]["kind"] == "jointtarget"
     assert by_name["pCurrent"]["static"] == "no"
     assert "assigned at line" in by_name["pCurrent"]["reason"]
