@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     claim_output(out)
     cell = out / "measurements"
-    steps = tqdm(total=5, desc="rapidfix demo", unit="step", leave=False)
+    steps = tqdm(total=6, desc="rapidfix demo", unit="step", leave=False)
 
     steps.set_postfix_str("simulating the cell")
     simulate_cell(cell, seed=args.seed, overwrite=True)
@@ -103,6 +103,14 @@ def run(args: argparse.Namespace) -> int:
     )
     html_path, json_path = write_report(report, out)
     steps.update()
+
+    # post-processor step: rewrite the sample programs (the ballbar among them) with the
+    # fitted model and run original and rewritten on the virtual robot
+    steps.set_postfix_str("rewriting and running the sample programs")
+    from rapidfix.postprocess.demo_programs import format_table, rewrite_and_run
+
+    programs = rewrite_and_run(None, out / "programs", model_path, virtual)
+    steps.update()
     steps.close()
 
     print(pipeline.before_after_table(report.summary))
@@ -111,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"model:        {model_path}")
     print(f"report:       {html_path}")
     print(f"report data:  {json_path}")
+    print(format_table(programs))
     for text in warned:
         print(f"rapidfix: warning: {text}", file=sys.stderr)
     return 3 if warned else 0

@@ -1,0 +1,93 @@
+"""`rapidfix rewrite`: one RAPID program compensated with an error model."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rapidfix.exceptions import OutputExistsError
+
+if TYPE_CHECKING:
+    from rapidfix.postprocess.rewrite import RewriteOptions
+
+
+def add_common_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by `rewrite` and `batch`."""
+    parser.add_argument("--model", required=True, metavar="MODEL",
+                        help="error model file (from `rapidfix fit` or `rapidfix diagnose`)")
+    robot = parser.add_mutually_exclusive_group()
+    robot.add_argument("--robot", metavar="NAME",
+                       help="robot model name (default: the robot the model was made for)")
+    robot.add_argument("--robot-file", metavar="F", help="robot model file (TOML)")
+    parser.add_argument("--decls", action="append", default=[], metavar="FILE",
+                        help="RAPID file declaring tooldata/wobjdata/robtargets the program "
+                        "uses but does not declare (may be repeated)")
+    parser.add_argument("--emit", choices=("jointtargets", "robtargets"), default="jointtargets",
+                        help="jointtargets: MoveAbsJ to compensated joint targets (default); "
+                        "robtargets: keep the instructions, write filtered robtargets")
+    parser.add_argument("--path-tolerance", type=float, default=0.1, metavar="MM",
+                        help="largest TCP deviation from a MoveL line or MoveC arc allowed "
+                        "between points; intermediate points are added (default 0.1 mm)")
+    parser.add_argument("--strict", action="store_true",
+                        help="fail, writing nothing, when any target cannot be compensated")
+    parser.add_argument("--force", action="store_true",
+                        help="rewrite a program that is already compensated")
+    parser.add_argument("--in-place", action="store_true",
+                        help="overwrite the input (a backup is kept beside it)")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `rewrite` command."""
+    parser = subparsers.add_parser(
+        "rewrite",
+        help="write a compensated copy of a RAPID program",
+        description="Compensate every motion target known before run time with an error "
+        "model and write the program back; everything else stays byte-identical. Exit "
+        "status 3 when targets were left as they were (listed), 1 on failure.",
+    )
+    parser.add_argument("program", metavar="PROG", help="RAPID program (.mod, .modx, .prg, .sys)")
+    parser.add_argument("-o", "--output", metavar="OUT", help="output file")
+    add_common_options(parser)
+    parser.set_defaults(func=run)
+
+
+def options_from_args(args: argparse.Namespace) -> RewriteOptions:
+    """RewriteOptions from parsed command-line arguments."""
+    from rapidfix.postprocess.rewrite import RewriteOptions
+
+    return RewriteOptions(
+        emit=args.emit,
+        path_tolerance_mm=args.path_tolerance,
+        strict=args.strict,
+        force=args.force,
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Rewrite one program; print the skipped targets and the predicted deviation."""
+    from rapidfix.postprocess.compensator import Compensator
+    from rapidfix.postprocess.rewrite import rewrite_file
+
+    source = Path(args.program)
+    if args.in_place:
+        if args.output is not None and Path(args.output).resolve() != source.resolve():
+            raise OutputExistsError("give either -o OUT or --in-place, not both")
+        target = source
+    elif args.output is None:
+        raise OutputExistsError("no output file given", hint="use -o OUT, or --in-place")
+    else:
+        target = Path(args.output)
+    options = options_from_args(args)
+    comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
+    result = rewrite_file(source, target, comp, options, in_place=args.in_place)
+    for line in result.report_lines():
+        print(line)
+    for skipped in result.skipped:
+        print(f"warning: {skipped}", file=sys.stderr)
+    if result.skipped and options.strict:
+        print(f"rapidfix: error: {len(result.skipped)} target(s) cannot be compensated "
+              "(--strict): nothing written", file=sys.stderr)
+        return 1
+    return 3 if result.skipped else 0

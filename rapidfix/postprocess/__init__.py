@@ -1,0 +1,24 @@
+"""The post-processor: RAPID programs rewritten with compensated targets.
+
+Joins the RAPID layer, the kinematics and the error model. One module per idea:
+
+- `compensator`  robot, error model (and its sha256), outside declarations, loaded once
+- `resolve`      which targets are known before run time; poses, confdata, frames as arrays
+- `placement`    per-move tool / work-object frames, TCP <-> flange for a batch
+- `plan`         IK on the confdata branch and the compensation solve, vectorised
+- `chain`        where each move starts (the motion executed just before it)
+- `path`         MoveL/MoveC kept within a tolerance when they become joint moves
+- `naming`       collision-free RAPID identifiers for new data
+- `literals`     jointtarget / robtarget literals for many targets at once
+- `header`       the header comment, and recognising a compensated program
+- `verify`       re-parse the output and predict where the robot will go
+- `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
+- `batch`        a tree of programs in parallel (`run_batch`)
+- `execute`      the joints a nominal controller commands for a program (to "run" it)
+- `demo_programs`, `ballbar_program`  the demo's step and the paper's ballbar program
+"""
+
+from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.rewrite import RewriteOptions, RewriteResult, rewrite_file, rewrite_source
+
+__all__ = ["Compensator", "RewriteOptions", "RewriteResult", "rewrite_file", "rewrite_source"]

@@ -1,0 +1,298 @@
+"""Rewrite a whole tree of RAPID programs, in parallel, one bad file never stopping the rest.
+
+Every .mod/.modx/.prg/.sys file under IN_DIR is rewritten into the same relative
+path under OUT_DIR (or in place, keeping a backup); other files are copied. Each
+file is one job for a process pool (the robot and the model are loaded once per
+worker process). A file whose output already records the same input sha256,
+model sha256 and options is skipped as up to date. Every write is atomic.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rapidfix.atomic import write_bytes_atomic
+from rapidfix.exceptions import OutputExistsError, RapidfixError
+from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.header import read_header, sha256_file
+from rapidfix.postprocess.rewrite import RewriteOptions, header_options, rewrite_file
+
+RAPID_SUFFIXES = (".mod", ".modx", ".prg", ".sys")
+
+
+@dataclass(frozen=True)
+class BatchSettings:
+    """What every worker needs to build its Compensator, plus the rewrite options."""
+
+    model_path: str
+    robot: str | None
+    robot_file: str | None
+    decl_files: tuple[str, ...]
+    options: RewriteOptions
+    in_place: bool = False
+
+
+@dataclass
+class FileOutcome:
+    """The result of one file: status ok | warnings | error | up-to-date | copied."""
+
+    path: str
+    status: str
+    moves_compensated: int = 0
+    moves_skipped: int = 0
+    points_added: int = 0
+    worst_predicted_mm: float | None = None
+    skipped: list[str] = field(default_factory=list)
+    message: str = ""
+
+
+@dataclass
+class BatchSummary:
+    """All outcomes, sorted by path, and the totals."""
+
+    files: list[FileOutcome]
+
+    def count(self, status: str) -> int:
+        """Number of files with this status."""
+        return sum(1 for f in self.files if f.status == status)
+
+    @property
+    def worst_predicted_mm(self) -> float | None:
+        """Largest predicted TCP deviation over all rewritten files."""
+        values = [f.worst_predicted_mm for f in self.files if f.worst_predicted_mm is not None]
+        return max(values) if values else None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data: totals and one entry per file."""
+        return {
+            "files": len(self.files),
+            "rewritten": self.count("ok") + self.count("warnings"),
+            "with_warnings": self.count("warnings"),
+            "errors": self.count("error"),
+            "up_to_date": self.count("up-to-date"),
+            "copied": self.count("copied"),
+            "moves_compensated": sum(f.moves_compensated for f in self.files),
+            "moves_skipped": sum(f.moves_skipped for f in self.files),
+            "points_added": sum(f.points_added for f in self.files),
+            "worst_predicted_mm": self.worst_predicted_mm,
+            "results": [asdict(f) for f in self.files],
+        }
+
+    def table(self) -> str:
+        """A console table, one row per file."""
+        head = ("file", "status", "compensated", "skipped", "added", "worst mm", "note")
+        rows = [head]
+        for f in self.files:
+            worst = "" if f.worst_predicted_mm is None else f"{f.worst_predicted_mm:.6f}"
+            note = f.message or (f.skipped[0] if f.skipped else "")
+            rows.append((f.path, f.status, str(f.moves_compensated), str(f.moves_skipped),
+                         str(f.points_added), worst, note))
+        widths = [max(len(r[i]) for r in rows) for i in range(len(head) - 1)]
+        lines = []
+        for r in rows:
+            cells = [r[i].ljust(widths[i]) for i in range(len(widths))]
+            lines.append("  ".join([*cells, r[-1]]).rstrip())
+        lines.insert(1, "  ".join("-" * w for w in widths) + "  ----")
+        return "\n".join(lines)
+
+
+def discover(in_dir: Path) -> list[Path]:
+    """Every file under in_dir, relative and sorted (leftover atomic-write temporaries skipped)."""
+    found = []
+    for root, dirs, files in os.walk(in_dir):
+        dirs.sort()
+        for name in sorted(files):
+            if name.startswith(".") and name.endswith(".tmp"):
+                continue
+            found.append((Path(root) / name).relative_to(in_dir))
+    return found
+
+
+def is_rapid(path: Path) -> bool:
+    """True for the file kinds the post-processor rewrites."""
+    return path.suffix.lower() in RAPID_SUFFIXES
+
+
+_CACHE: dict[BatchSettings, Compensator] = {}
+
+
+def _compensator(settings: BatchSettings) -> Compensator:
+    if settings not in _CACHE:
+        _CACHE.clear()
+        _CACHE[settings] = Compensator.load(
+            settings.model_path, settings.robot, settings.robot_file, list(settings.decl_files)
+        )
+    return _CACHE[settings]
+
+
+def _up_to_date(source: Path, target: Path, settings: BatchSettings, comp: Compensator) -> bool:
+    if not target.exists():
+        return False
+    try:
+        header = read_header(target.read_bytes().decode("latin-1"))
+    except OSError:
+        return False
+    return (
+        header is not None
+        and header.input_sha256 == sha256_file(source)
+        and header.model_sha256 == comp.model_sha256
+        and header.options == header_options(settings.options, comp)
+    )
+
+
+_SUMMARY = re.compile(r"(\d+) of \d+ moves compensated, (\d+) points added, (\d+) left")
+
+
+def _from_summary(rel: str, summary: str) -> FileOutcome:
+    """An up-to-date file's outcome, with the counts its header recorded."""
+    found = _SUMMARY.search(summary)
+    counts = [int(g) for g in found.groups()] if found else [0, 0, 0]
+    return FileOutcome(rel, "up-to-date", moves_compensated=counts[0], points_added=counts[1],
+                       moves_skipped=counts[2], message=summary)
+
+
+def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) -> FileOutcome:
+    """Rewrite or copy one file; every project error becomes an 'error' outcome."""
+    try:
+        if not is_rapid(source):
+            data = source.read_bytes()
+            if not (target.exists() and target.read_bytes() == data):
+                write_bytes_atomic(target, data)
+            return FileOutcome(rel, "copied")
+        comp = _compensator(settings)
+        if settings.in_place and not settings.options.force:
+            header = read_header(source.read_bytes().decode("latin-1"))
+            if header is not None:
+                return FileOutcome(rel, "up-to-date", message="already compensated")
+        if not settings.in_place and _up_to_date(source, target, settings, comp):
+            header = read_header(target.read_bytes().decode("latin-1"))
+            return _from_summary(rel, header.summary if header else "")
+        result = rewrite_file(source, target, comp, settings.options,
+                              in_place=settings.in_place, name=rel)
+        if not result.written:  # --strict and something could not be compensated
+            status = "error"
+            note = f"{len(result.skipped)} target(s) cannot be compensated (--strict): not written"
+        else:
+            status, note = ("warnings" if result.skipped else "ok"), ""
+        return FileOutcome(
+            rel,
+            status,
+            moves_compensated=result.moves_compensated if result.written else 0,
+            moves_skipped=len(result.skipped),
+            points_added=result.points_added if result.written else 0,
+            worst_predicted_mm=result.worst_predicted_mm if result.written else None,
+            skipped=[str(s) for s in result.skipped],
+            message=note,
+        )
+    except RapidfixError as err:
+        return FileOutcome(rel, "error", message=str(err))
+    except OSError as err:
+        return FileOutcome(rel, "error", message=f"{err.filename or rel}: {err.strerror or err}")
+
+
+def _job(args: tuple[str, str, str, BatchSettings]) -> FileOutcome:
+    source, target, rel, settings = args
+    try:
+        return process_file(Path(source), Path(target), rel, settings)
+    except Exception as err:  # a bug must not stop the other files; report it with the file
+        return FileOutcome(rel, "error", message=f"internal error: {err!r}")
+
+
+def run_batch(
+    in_dir: str | Path,
+    out_dir: str | Path | None,
+    settings: BatchSettings,
+    *,
+    workers: int | None = None,
+    progress: bool = True,
+    on_result: Callable[[FileOutcome], None] | None = None,
+) -> BatchSummary:
+    """Rewrite every RAPID file under in_dir into out_dir (or in place); never raises per file."""
+    src_root = Path(in_dir)
+    if not src_root.is_dir():
+        raise RapidfixError("not a folder", file=src_root)
+    if settings.in_place:
+        dst_root = src_root
+    else:
+        if out_dir is None:
+            raise OutputExistsError("an output folder is needed unless --in-place is given")
+        dst_root = Path(out_dir)
+        a, b = src_root.resolve(), dst_root.resolve()
+        if a == b or a in b.parents:
+            raise OutputExistsError(
+                "the output folder must not be the input folder or inside it",
+                file=dst_root, hint="use --in-place to rewrite the inputs, keeping backups",
+            )
+    files = discover(src_root)
+    if settings.in_place:
+        files = [f for f in files if is_rapid(f)]
+    jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings) for f in files]
+    # largest files first, so no worker is left with a big one at the end
+    jobs.sort(key=lambda job: -Path(job[0]).stat().st_size)
+    # fail early, once, on a bad model or robot instead of once per file
+    _compensator(settings)
+    workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
+    outcomes: list[FileOutcome] = []
+    bar = _progress(len(jobs), progress)
+    try:
+        if workers == 1 or len(jobs) <= 1:
+            for job in jobs:
+                outcomes.append(_job(job))
+                _advance(bar, outcomes[-1], on_result)
+        else:
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                futures = {pool.submit(_job, job): job for job in jobs}
+                for future in as_completed(futures):
+                    try:
+                        outcome = future.result()
+                    except Exception as err:  # a worker died: report the file, keep going
+                        outcome = FileOutcome(futures[future][2], "error",
+                                              message=f"internal error: {err!r}")
+                    outcomes.append(outcome)
+                    _advance(bar, outcome, on_result)
+    finally:
+        if bar is not None:
+            bar.close()
+    outcomes.sort(key=lambda o: o.path)
+    return BatchSummary(outcomes)
+
+
+def _progress(total: int, enabled: bool) -> Any:
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="file", desc="rapidfix batch", leave=False)
+
+
+def _advance(
+    bar: Any, outcome: FileOutcome, on_result: Callable[[FileOutcome], None] | None
+) -> None:
+    if bar is not None:
+        bar.update(1)
+    if on_result is not None:
+        on_result(outcome)
+
+
+def write_summary(summary: BatchSummary, path: str | Path) -> Path:
+    """The JSON summary, written atomically."""
+    text = json.dumps(summary.to_dict(), indent=1) + "\n"
+    return write_bytes_atomic(path, text.encode("utf-8"))
+
+
+__all__ = [
+    "RAPID_SUFFIXES",
+    "BatchSettings",
+    "BatchSummary",
+    "FileOutcome",
+    "process_file",
+    "run_batch",
+    "write_summary",
+]

@@ -1,0 +1,53 @@
+"""Collision-free RAPID identifiers for the data the post-processor declares.
+
+RAPID identifiers are case-insensitive, start with a letter, hold letters, digits
+and underscores, and are at most 32 characters long. A new jointtarget is named
+after the robtarget it replaces (`p10` -> `jt_p10`); when that name is already
+taken anywhere in the program (any identifier at all, keywords and routine names
+included) a numeric suffix makes it unique, shortening the stem to stay within
+32 characters.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+
+MAX_IDENTIFIER = 32
+_IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_BAD = re.compile(r"[^A-Za-z0-9_]+")
+
+
+def identifiers_in(text: str) -> set[str]:
+    """Every identifier-shaped word of a RAPID text, lower-cased (a superset is harmless)."""
+    return {word.lower() for word in _IDENT.findall(text)}
+
+
+class NameAllocator:
+    """Hands out identifiers that collide with nothing already used, case-insensitively."""
+
+    def __init__(self, taken: Iterable[str] = ()) -> None:
+        self._taken = {name.lower() for name in taken}
+
+    def reserve(self, name: str) -> None:
+        """Mark a name as used (it will never be handed out)."""
+        self._taken.add(name.lower())
+
+    def is_free(self, name: str) -> bool:
+        """True when `name` is not used yet."""
+        return name.lower() not in self._taken
+
+    def allocate(self, stem: str, prefix: str = "jt_") -> str:
+        """A fresh identifier `prefix + stem`, suffixed `_2`, `_3`, … when taken."""
+        clean = _BAD.sub("_", stem).strip("_") or "target"
+        base = prefix + clean
+        if not base[0].isalpha():
+            base = "t" + base
+        candidate = base[:MAX_IDENTIFIER]
+        counter = 1
+        while not self.is_free(candidate):
+            counter += 1
+            suffix = f"_{counter}"
+            candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
+        self.reserve(candidate)
+        return candidate

@@ -1,0 +1,255 @@
+"""Keeping linear and circular paths when a move becomes joint-interpolated.
+
+MoveL and MoveC ask the controller for a straight line or a circular arc of the
+TCP. A MoveAbsJ moves every joint linearly between two joint vectors instead,
+which bends the path between its end points. This module measures how far the
+TCP strays from the intended curve on the commanded joint path (as the error
+model predicts the real robot executes it) and inserts intermediate, compensated
+points until every piece is within the tolerance.
+
+All segments of a program are refined together: each round evaluates every open
+interval at a few interior fractions in one batch, splits those that stray too
+far into k ≈ √(deviation / tolerance) pieces (a chord's deviation falls with the
+square of its length), solves the new points in one batch and repeats.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+#: interior fractions of an interval where its deviation is sampled
+SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, 7)[1:-1]
+#: refine until the sampled deviation is below this share of the tolerance,
+#: leaving a margin for the maximum between samples
+MARGIN = 0.8
+#: intervals straying less than this share of the tolerance at SCREEN_FRACTIONS are not
+#: sampled further
+SCREEN = 0.1
+SCREEN_FRACTIONS = np.array([1.0 / 3.0, 2.0 / 3.0])
+MAX_ROUNDS = 8
+MAX_SPLIT = 64
+
+
+@dataclass(frozen=True)
+class Curves:
+    """Intended TCP paths of M segments, each in its own work-object frame.
+
+    `start`, `end` (M,4,4) TCP poses; `via` (M,3) the circle point of a MoveC
+    (ignored where `circular` is False). Orientation is interpolated from start
+    to end (slerp) on both kinds, as the controller does.
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    via: np.ndarray
+    circular: np.ndarray
+
+    def __post_init__(self) -> None:
+        a, b, c = self.start[:, :3, 3], self.end[:, :3, 3], self.via
+        n = np.cross(c - a, b - a)
+        n_len = np.linalg.norm(n, axis=1)
+        scale = np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)
+        arc = self.circular & (n_len > 1e-9 * scale * scale)
+        nrm = n / np.where(n_len > 0, n_len, 1.0)[:, None]
+        # circle centre: the point of the plane equidistant from a, b and c
+        # (circumcentre a + (|u|² v×w + |v|² w×u) / 2|w|², u = b−a, v = c−a, w = u×v = −n)
+        ab, ac = b - a, c - a
+        num = (
+            np.sum(ab * ab, axis=1)[:, None] * np.cross(ac, -n)
+            + np.sum(ac * ac, axis=1)[:, None] * np.cross(-n, ab)
+        )
+        centre = a + num / np.where(arc, 2.0 * n_len * n_len, 1.0)[:, None]
+        radius = np.linalg.norm(a - centre, axis=1)
+        u = (a - centre) / np.where(radius > 0, radius, 1.0)[:, None]
+        v = np.cross(nrm, u)
+        rel_b = b - centre
+        sweep = np.mod(np.arctan2(np.sum(rel_b * v, axis=1), np.sum(rel_b * u, axis=1)), 2 * np.pi)
+        rot_a = Rotation.from_matrix(self.start[:, :3, :3])
+        rel = (rot_a.inv() * Rotation.from_matrix(self.end[:, :3, :3])).as_rotvec()
+        object.__setattr__(self, "_arc", arc)
+        object.__setattr__(self, "_geom", (centre, radius, u, v, nrm, sweep))
+        object.__setattr__(self, "_rot", (self.start[:, :3, :3], rel))
+
+    @property
+    def degenerate(self) -> np.ndarray:
+        """(M,) MoveC segments whose three points are (nearly) on one line."""
+        return self.circular & ~self._arc  # type: ignore[attr-defined]
+
+    def positions(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Intended TCP positions (K,3) at path fractions s (K,) of segments seg (K,)."""
+        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
+        line = a + s[:, None] * (b - a)
+        centre, radius, u, v, _, sweep = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
+        phi = s * sweep
+        circle = centre + radius[:, None] * (np.cos(phi)[:, None] * u + np.sin(phi)[:, None] * v)
+        return np.where(self._arc[seg][:, None], circle, line)  # type: ignore[attr-defined]
+
+    def poses(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Intended TCP poses (K,4,4): positions along the curve, orientation by slerp."""
+        rot_a, rel = (g[seg] for g in self._rot)  # type: ignore[attr-defined]
+        out = np.zeros((seg.shape[0], 4, 4))
+        out[:, :3, :3] = rot_a @ Rotation.from_rotvec(s[:, None] * rel).as_matrix()
+        out[:, :3, 3] = self.positions(seg, s)
+        out[:, 3, 3] = 1.0
+        return out
+
+    def distance(self, seg: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Distance (K,) mm of points (K,3) from the intended curves of segments seg (K,)."""
+        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
+        ab = b - a
+        length2 = np.sum(ab * ab, axis=1)
+        t = np.clip(np.sum((points - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
+        to_line = np.linalg.norm(points - a - t[:, None] * ab, axis=1)
+        centre, radius, _, _, nrm, _ = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
+        d = points - centre
+        h = np.sum(d * nrm, axis=1)
+        r = np.linalg.norm(d - h[:, None] * nrm, axis=1)
+        to_circle = np.hypot(r - radius, h)
+        return np.where(self._arc[seg], to_circle, to_line)  # type: ignore[attr-defined]
+
+
+#: predicted TCP positions (K,3) in the segments' frames for commanded joints (K,6)
+Predict = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: solve intended TCP poses (K,4,4) of segments seg (K,) near seed ideal joints (K,6):
+#: returns ideal joints (K,6), commanded joints (K,6) and a success mask (K,)
+Solve = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """Intermediate points to insert, sorted by segment and path fraction.
+
+    `seg` (P,), `s` (P,), `q_ideal` (P,6), `q_cmd` (P,6), `pose` (P,4,4) intended
+    TCP pose; per segment: `deviation` (M,) the largest sampled deviation left, mm,
+    and `failed` (M,) segments whose path could not be brought within tolerance.
+    """
+
+    seg: np.ndarray
+    s: np.ndarray
+    q_ideal: np.ndarray
+    q_cmd: np.ndarray
+    pose: np.ndarray
+    deviation: np.ndarray
+    failed: np.ndarray
+
+
+def _sampled(curves: Curves, seg: np.ndarray, qc0: np.ndarray, qc1: np.ndarray,
+             predict: Predict, f: np.ndarray) -> np.ndarray:
+    k, nf = seg.shape[0], f.shape[0]
+    q = (qc0[:, None, :] + f[None, :, None] * (qc1 - qc0)[:, None, :]).reshape(-1, 6)
+    seg_f = np.repeat(seg, nf)
+    return curves.distance(seg_f, predict(seg_f, q)).reshape(k, nf).max(axis=1)
+
+
+def interval_deviation(
+    curves: Curves, seg: np.ndarray, qc0: np.ndarray, qc1: np.ndarray, predict: Predict,
+    screen: float = 0.0,
+) -> np.ndarray:
+    """Largest sampled distance (K,) from the curve of a joint-linear move qc0 -> qc1.
+
+    The distance is geometric (to the whole curve), so where along the curve the
+    interval lies does not matter: the controller's timing is not the curve's.
+    With `screen` > 0 every interval is first looked at a third and two thirds of
+    the way (a single parabolic bow shows there at 8/9 of its peak, a sine-shaped
+    S crossing the line half way at 87 %); only those straying more than `screen`
+    there are sampled
+    at all SAMPLE_FRACTIONS, so a CAM program's many short moves cost two
+    evaluations each.
+    """
+    if screen <= 0.0:
+        return _sampled(curves, seg, qc0, qc1, predict, SAMPLE_FRACTIONS)
+    dev = _sampled(curves, seg, qc0, qc1, predict, SCREEN_FRACTIONS)
+    suspect = np.flatnonzero(dev > screen)
+    if suspect.size:
+        dev[suspect] = np.maximum(dev[suspect], _sampled(
+            curves, seg[suspect], qc0[suspect], qc1[suspect], predict, SAMPLE_FRACTIONS))
+    return dev
+
+
+def refine(
+    curves: Curves, q_ideal: tuple[np.ndarray, np.ndarray], q_cmd: tuple[np.ndarray, np.ndarray],
+    tolerance: float, predict: Predict, solve: Solve,
+) -> Refinement:
+    """Intermediate points that keep every segment within `tolerance` mm of its curve.
+
+    q_ideal, q_cmd: (start (M,6), end (M,6)) joints at the segment ends.
+    """
+    m = curves.start.shape[0]
+    seg = np.arange(m)
+    s0, s1 = np.zeros(m), np.ones(m)
+    qi0, qi1 = (np.asarray(x, float) for x in q_ideal)
+    qc0, qc1 = (np.asarray(x, float) for x in q_cmd)
+    failed = curves.degenerate.copy()
+    deviation = np.zeros(m)
+    out_seg, out_s, out_qi, out_qc = [], [], [], []
+    target = MARGIN * tolerance
+    for _ in range(MAX_ROUNDS):
+        if seg.size == 0:
+            break
+        dev = interval_deviation(curves, seg, qc0, qc1, predict, SCREEN * tolerance)
+        bad = (dev > target) & ~failed[seg]
+        np.maximum.at(deviation, seg[~bad], dev[~bad])
+        if not bad.any():
+            break
+        seg, s0, s1, qi0, qi1, qc0, qc1, dev = (
+            x[bad] for x in (seg, s0, s1, qi0, qi1, qc0, qc1, dev)
+        )
+        k = np.clip(np.ceil(np.sqrt(dev / target) * 1.1), 2, MAX_SPLIT).astype(int)
+        owner = np.repeat(np.arange(seg.shape[0]), k - 1)
+        j = np.arange(owner.shape[0]) - np.repeat(np.cumsum(k - 1) - (k - 1), k - 1) + 1
+        frac = j / k[owner]
+        new_seg = seg[owner]
+        new_s = s0[owner] + frac * (s1 - s0)[owner]
+        seed = qi0[owner] + frac[:, None] * (qi1 - qi0)[owner]
+        new_qi, new_qc, ok = solve(new_seg, curves.poses(new_seg, new_s), seed)
+        failed[new_seg[~ok]] = True
+        out_seg.append(new_seg[ok])
+        out_s.append(new_s[ok])
+        out_qi.append(new_qi[ok])
+        out_qc.append(new_qc[ok])
+        # the pieces of every split interval: knots s0, new points..., s1
+        starts = np.cumsum(k) - k
+        knot_count = k + 1
+        knot_owner = np.repeat(np.arange(seg.shape[0]), knot_count)
+        kn_s = np.empty(knot_owner.shape[0])
+        kn_qi = np.empty((knot_owner.shape[0], 6))
+        kn_qc = np.empty((knot_owner.shape[0], 6))
+        first = starts + np.arange(seg.shape[0])
+        last = first + k
+        inner = np.ones(knot_owner.shape[0], dtype=bool)
+        inner[first] = False
+        inner[last] = False
+        kn_s[first], kn_s[last] = s0, s1
+        kn_qi[first], kn_qi[last] = qi0, qi1
+        kn_qc[first], kn_qc[last] = qc0, qc1
+        kn_s[inner], kn_qi[inner], kn_qc[inner] = new_s, new_qi, new_qc
+        piece = np.ones(knot_owner.shape[0], dtype=bool)
+        piece[last] = False  # a piece starts at every knot but the last of its interval
+        alive = ~failed[seg][knot_owner[piece]]
+        idx = np.nonzero(piece)[0][alive]
+        seg = seg[knot_owner[idx]]
+        s0, s1 = kn_s[idx], kn_s[idx + 1]
+        qi0, qi1 = kn_qi[idx], kn_qi[idx + 1]
+        qc0, qc1 = kn_qc[idx], kn_qc[idx + 1]
+    else:
+        if seg.size:
+            dev = interval_deviation(curves, seg, qc0, qc1, predict)
+            np.maximum.at(deviation, seg, dev)
+            failed[seg[dev > tolerance]] = True
+
+    cat_seg = np.concatenate(out_seg) if out_seg else np.zeros(0, dtype=int)
+    cat_s = np.concatenate(out_s) if out_s else np.zeros(0)
+    cat_qi = np.concatenate(out_qi) if out_qi else np.zeros((0, 6))
+    cat_qc = np.concatenate(out_qc) if out_qc else np.zeros((0, 6))
+    drop = failed[cat_seg]
+    cat_seg, cat_s, cat_qi, cat_qc = (x[~drop] for x in (cat_seg, cat_s, cat_qi, cat_qc))
+    order = np.lexsort((cat_s, cat_seg))
+    cat_seg, cat_s, cat_qi, cat_qc = (x[order] for x in (cat_seg, cat_s, cat_qi, cat_qc))
+    return Refinement(
+        seg=cat_seg, s=cat_s, q_ideal=cat_qi, q_cmd=cat_qc,
+        pose=curves.poses(cat_seg, cat_s), deviation=deviation, failed=failed,
+    )

@@ -1,0 +1,197 @@
+"""The compensation plan: TCP targets -> flange poses -> ideal joints -> commanded joints.
+
+One vectorised pass over every target of a program: the flange poses from the
+targets' tool and work-object frames, the analytic IK on the branch each
+confdata names (or, for intermediate path points, the branch nearest a seed),
+then the error model's compensation solve. Every target that fails gets a
+reason a programmer can act on; no NaN leaves this module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rapidfix.errors.compensate import solve_compensation
+from rapidfix.errors.context import Context
+from rapidfix.errors.model import ErrorModel
+from rapidfix.exceptions import ModelError
+from rapidfix.kinematics.confdata import CONF_TOL, QUADRANT, conf_matches
+from rapidfix.kinematics.ik_result import IKStatus
+from rapidfix.postprocess.placement import Placement
+
+REASONS = {
+    IKStatus.WRIST_SINGULAR: "wrist singularity (axis 5 at 0 deg): axes 4 and 6 are not determined",
+    IKStatus.BEYOND_LIMITS: "beyond the joint limits on every branch",
+    IKStatus.UNREACHABLE: "out of reach",
+    IKStatus.NO_MATCHING_CONF: "no solution on the branch its confdata names",
+    IKStatus.INVALID_POSE: "not a valid pose (quaternion or numbers)",
+}
+LIMIT_REASON = "beyond the joint limits after compensation"
+SOLVE_REASON = "compensation did not converge"
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Per target: `flange` (N,4,4) intended tool0 pose in the base frame, `q_ideal` and
+    `q_cmd` (N,6) rad, `ok` (N,) and `reason` (N,) ('' where ok)."""
+
+    flange: np.ndarray
+    q_ideal: np.ndarray
+    q_cmd: np.ndarray
+    ok: np.ndarray
+    reason: np.ndarray
+
+
+def ik_on_conf(robot: Any, flange: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The IK solution each confdata names: the same answer as `robot.ik_conf`, faster.
+
+    A pose has about a hundred solution slots (branches and ±360° variants); the
+    geometric part of the confdata test (`conf_matches`: wrist centre sides, θ5
+    sign) is evaluated only on the slots whose axis 1, 4 and 6 quadrants already
+    agree with cf1, cf4, cf6 — one or two per pose — instead of on all of them.
+    """
+    sols = robot.ik(flange)
+    n = len(sols)
+    conf = np.asarray(conf, dtype=int)
+    with np.errstate(invalid="ignore"):
+        angles = sols.q[:, :, [0, 3, 5]]
+        lo = np.floor((angles - CONF_TOL) / QUADRANT)
+        hi = np.floor((angles + CONF_TOL) / QUADRANT)
+        want = conf[:, None, :3]
+        candidate = sols.valid & np.all((lo <= want) & (want <= hi), axis=2)
+    rows, slots = np.nonzero(candidate)
+    match = np.zeros_like(candidate)
+    if rows.size:
+        match[rows, slots] = conf_matches(robot, sols.q[rows, slots], conf[rows])
+    found = match.any(axis=1)
+    chosen = np.argmax(match, axis=1)
+    every = np.arange(n)
+    q = np.where(found[:, None], sols.q[every, chosen], np.nan)
+    status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
+    status[found & sols.singular[every, chosen]] = IKStatus.WRIST_SINGULAR
+    unsolved = ~sols.valid.any(axis=1)
+    status[unsolved] = sols.status[unsolved]
+    return q, status
+
+
+def compensation_tool(placement: Placement) -> np.ndarray:
+    """The TCP the general solve matches (N,4,4): the tool for robot-held tools, else tool0.
+
+    With a stationary tool the robot carries the work object, so the flange pose
+    itself must be reached.
+    """
+    eye = np.broadcast_to(np.eye(4), placement.tool.shape)
+    return np.where(placement.stationary[:, None, None], eye, placement.tool)
+
+
+def compensate_joints(
+    model: ErrorModel, robot: Any, q_ideal: np.ndarray, placement: Placement, ctx: Context
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Commanded joints (N,6) for ideal joints, with success mask and reasons."""
+    n = q_ideal.shape[0]
+    reason = np.full(n, "", dtype=object)
+    if n == 0:
+        return np.zeros((0, 6)), np.zeros(0, dtype=bool), reason
+    try:
+        result = solve_compensation(model, robot, q_ideal, ctx, tool=compensation_tool(placement))
+    except ModelError as err:
+        reason[:] = f"the model cannot compensate it: {err.message}"
+        return q_ideal.copy(), np.zeros(n, dtype=bool), reason
+    q_cmd = np.asarray(result.q_cmd, dtype=float)
+    finite = np.all(np.isfinite(q_cmd), axis=1)
+    ok = np.asarray(result.converged, dtype=bool) & finite
+    reason[~ok] = SOLVE_REASON
+    inside = robot.within_limits(np.where(finite[:, None], q_cmd, 0.0))
+    reason[ok & ~inside] = LIMIT_REASON
+    ok &= inside
+    return np.where(ok[:, None], q_cmd, q_ideal), ok, reason
+
+
+def _explain_conf(robot: Any, flange: np.ndarray, conf: np.ndarray, status: np.ndarray,
+                  reason: np.ndarray, shown: int = 3) -> None:
+    """Name the confdata that do reach a target whose own confdata names no solution.
+
+    Runs on the failing targets only (an error path, so a loop over them is fine).
+    """
+    rows = np.flatnonzero(status == IKStatus.NO_MATCHING_CONF)
+    if rows.size == 0:
+        return
+    sols = robot.ik(flange[rows])
+    for k, row in enumerate(rows):
+        valid = sols.q[k][sols.valid[k]]
+        if valid.shape[0] == 0:
+            continue
+        found = np.unique(robot.confdata(valid), axis=0)
+        order = np.argsort(np.abs(found - conf[row]).sum(axis=1), kind="stable")
+        options = ", ".join(str(found[i].tolist()) for i in order[:shown])
+        reason[row] = (f"no solution on the branch its confdata {conf[row].tolist()} names "
+                       f"(it is reachable with {options})")
+
+
+def plan_targets(
+    model: ErrorModel,
+    robot: Any,
+    targets: np.ndarray,
+    conf: np.ndarray,
+    placement: Placement,
+    ctx: Context,
+) -> Plan:
+    """Plan every target (N,4,4) TCP pose in its work object, on its confdata branch."""
+    n = targets.shape[0]
+    flange = placement.flange(targets) if n else np.zeros((0, 4, 4))
+    reason = np.full(n, "", dtype=object)
+    if n == 0:
+        return Plan(flange, np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0, bool), reason)
+    q_ideal, status = ik_on_conf(robot, flange, conf)
+    status = np.asarray(status)
+    solved = status == IKStatus.OK
+    for code, text in REASONS.items():
+        reason[status == code] = text
+    _explain_conf(robot, flange, conf, status, reason)
+    q_ideal = np.where(solved[:, None], np.nan_to_num(np.asarray(q_ideal, float)), 0.0)
+    idx = np.flatnonzero(solved)
+    q_cmd = q_ideal.copy()
+    ok = np.zeros(n, dtype=bool)
+    if idx.size:
+        if ctx.q_prev is None:
+            # targets in program order: each is approached from the one before it
+            # (direction-dependent effects such as backlash need the motion direction)
+            q_prev = q_ideal[idx].copy()
+            q_prev[1:] = q_ideal[idx][:-1]
+            sub = ctx.take(idx).with_q_prev(q_prev)
+        else:
+            sub = ctx.take(idx)
+        qc, good, why = compensate_joints(model, robot, q_ideal[idx], placement.take(idx), sub)
+        q_cmd[idx], ok[idx], reason[idx] = qc, good, why
+    return Plan(flange, q_ideal, q_cmd, ok, reason)
+
+
+def plan_nearest(
+    model: ErrorModel,
+    robot: Any,
+    targets: np.ndarray,
+    seed: np.ndarray,
+    placement: Placement,
+    ctx: Context,
+) -> Plan:
+    """Plan intermediate path points: the IK branch nearest the seed joints (N,6)."""
+    n = targets.shape[0]
+    flange = placement.flange(targets)
+    reason = np.full(n, "", dtype=object)
+    q_ideal, status = robot.ik_nearest(flange, seed)
+    status = np.asarray(status)
+    solved = status == IKStatus.OK
+    for code, text in REASONS.items():
+        reason[status == code] = text
+    q_ideal = np.where(solved[:, None], np.nan_to_num(np.asarray(q_ideal, float)), seed)
+    idx = np.flatnonzero(solved)
+    q_cmd = q_ideal.copy()
+    ok = np.zeros(n, dtype=bool)
+    if idx.size:
+        qc, good, why = compensate_joints(model, robot, q_ideal[idx], placement.take(idx),
+                                          ctx.take(idx))
+        q_cmd[idx], ok[idx], reason[idx] = qc, good, why
+    return Plan(flange, q_ideal, q_cmd, ok, reason)

@@ -1,0 +1,284 @@
+"""Which motion targets can be compensated, and their poses, confdata and frames as arrays.
+
+For every motion instruction of a program this decides whether its targets are
+known before run time, finds its tool and work object (in the program, among
+the controller's predefined data, or in declaration files the user passes for
+data defined elsewhere) and gathers, per target, the TCP pose in its work
+object, the confdata, the external axes, the frames and the payload — one row
+per target, in program order, so that everything after this is vectorised.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rapidfix.kinematics.frames import pose
+from rapidfix.postprocess.placement import Placement
+from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program
+from rapidfix.rapid.values import ToolData, WobjData
+
+#: instructions that become MoveAbsJ (instruction key -> path kind)
+JOINT_FORM = {"movel": "L", "movej": "J", "movec": "C"}
+#: optional arguments MoveAbsJ accepts as well
+MOVEABSJ_OPTIONS = frozenset({"conc", "id", "noeoffs", "v", "t", "z", "inpos", "wobj", "tload"})
+_UNDECLARED = "is not declared in this file"
+
+
+@dataclass
+class Site:
+    """One motion instruction and what the post-processor does with it.
+
+    `kind` 'L', 'J', 'C' (linear, joint, circular path) or 'X' (another instruction,
+    kept, only its robtargets filtered); `rows` its target rows (CirPoint first);
+    `reason` why it is left as it was (None when it is compensated).
+    """
+
+    motion: MotionInstruction
+    kind: str
+    targets: list[Operand] = field(default_factory=list)
+    rows: list[int] = field(default_factory=list)
+    reason: str | None = None
+
+    @property
+    def where(self) -> str:
+        """`file:line` of the instruction."""
+        span = self.motion.span
+        return f"{span.file}:{span.line}"
+
+    @property
+    def label(self) -> str:
+        """The instruction and its destination as written, for messages."""
+        target = self.targets[-1] if self.targets else None
+        return f"{self.motion.name} {target.text if target else ''}".strip()
+
+
+@dataclass
+class Targets:
+    """Per target row: TCP `pose` (N,4,4) in its work object, `conf` (N,4) int,
+    `extax` (N,6), frames `placement`, `payload_kg` (N,), `site` (N,) owning site index,
+    `operand` the Operand of each row."""
+
+    pose: np.ndarray
+    conf: np.ndarray
+    extax: np.ndarray
+    placement: Placement
+    payload_kg: np.ndarray
+    site: np.ndarray
+    operand: list[Operand]
+
+
+class Declarations:
+    """Data declared outside the program (the --decls files), by lower-case name."""
+
+    def __init__(self, programs: list[Program]) -> None:
+        self._by_name: dict[str, Declaration] = {}
+        for program in programs:
+            for decl in program.declarations:
+                if decl.routine is None and decl.static and decl.value is not None:
+                    self._by_name.setdefault(decl.key, decl)
+
+    def get(self, name: str, type_name: str) -> Any:
+        """Typed value of a declaration of this type, or None."""
+        decl = self._by_name.get(name.lower())
+        if decl is None or decl.type_key != type_name:
+            return None
+        return decl.data
+
+
+def operand_data(operand: Operand | None, type_name: str, outside: Declarations) -> tuple[Any, str]:
+    """(typed value, '') of an operand, or (None, reason) when it is not known."""
+    if operand is None:
+        return None, f"no {type_name}"
+    if operand.static and operand.value is not None:
+        data = operand.data
+        if data is not None:
+            return data, ""
+    if operand.form == "name" and operand.name and operand.declaration is None:
+        data = outside.get(operand.name, type_name)
+        if data is not None:
+            return data, ""
+    reason = operand.reason or "not known before run time"
+    if _UNDECLARED in reason:
+        reason += " (pass the file that declares it with --decls)"
+    return None, reason
+
+
+#: the target parameters of motion instructions, in the order they are written
+_TARGET_KEYS = ("cirpoint", "topoint", "tojointpos")
+
+
+def motion_targets(motion: MotionInstruction) -> list[Operand]:
+    """The target operands of a motion instruction (CirPoint before ToPoint).
+
+    What `MotionInstruction.targets` returns, read straight from its argument
+    dict: this runs once per move of a program.
+    """
+    args = motion.arguments
+    return [args[key] for key in _TARGET_KEYS if key in args]
+
+
+def _target_value(operand: Operand, outside: Declarations) -> tuple[Any, str]:
+    """A robtarget operand's raw value ((x,y,z), (q1..q4), (cf..), (e..)), or (None, reason).
+
+    The raw tuple (already checked against the robtarget shape by the RAPID layer)
+    is used instead of the typed view: this runs once per move of the program.
+    """
+    if operand.static and operand.value is not None and operand.type_name == "robtarget":
+        return operand.value, ""
+    data, why = operand_data(operand, "robtarget", outside)
+    if data is None:
+        return None, why
+    return (data.trans, data.rot, data.robconf, data.extax), ""
+
+
+class _FrameCache:
+    """Typed tool / work object / load data per distinct operand (a program uses a few)."""
+
+    def __init__(self, outside: Declarations) -> None:
+        self.outside = outside
+        self.known: dict[tuple, tuple[Any, str]] = {}
+
+    def get(self, operand: Operand, type_name: str) -> tuple[Any, str]:
+        key = (type_name, operand.text.lower(), id(operand.declaration), operand.static)
+        found = self.known.get(key)
+        if found is None:
+            found = self.known[key] = operand_data(operand, type_name, self.outside)
+        return found
+
+
+def operand_label(operands: list[Operand], operand: Operand) -> str:
+    """'' for the destination (the site's label names it), else 'CirPoint p20: '."""
+    if operand is operands[-1]:
+        return ""
+    return f"{operand.argument.name or 'CirPoint'} {operand.text}: "
+
+
+def _site_kind(motion: MotionInstruction, emit: str) -> tuple[str, str | None]:
+    key = motion.name.lower()
+    if emit == "jointtargets":
+        kind = JOINT_FORM.get(key)
+        if kind is None:
+            return "X", f"{motion.name} has no joint-target form (use --emit robtargets)"
+        extra = [op.argument.name for name, op in motion.optional.items()
+                 if name not in MOVEABSJ_OPTIONS]
+        if extra:
+            return kind, f"optional argument \\{extra[0]} has no MoveAbsJ form"
+        return kind, None
+    return JOINT_FORM.get(key, "X"), None
+
+
+def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Site], Targets]:
+    """Sites for every robtarget motion instruction, and the rows of the usable targets."""
+    sites: list[Site] = []
+    robtargets: list[tuple] = []
+    tools: list[ToolData] = []
+    wobjs: list[WobjData | None] = []
+    masses: list[float] = []
+    owners: list[int] = []
+    operands: list[Operand] = []
+    frames = _FrameCache(outside)
+    for motion in program.motions:
+        if motion.target_kind != "robtarget":
+            continue
+        site_ops = motion_targets(motion)
+        if not site_ops:
+            continue
+        kind, reason = _site_kind(motion, emit)
+        site = Site(motion, kind, site_ops, reason=reason)
+        sites.append(site)
+        if reason is not None:
+            continue
+        values = []
+        for operand in site_ops:
+            data, why = _target_value(operand, outside)
+            if data is None:
+                site.reason = operand_label(site_ops, operand) + why
+                break
+            if sum(c * c for c in data[1]) < 1e-12:
+                site.reason = operand_label(site_ops, operand) + "orientation quaternion is zero"
+                break
+            values.append(data)
+        if site.reason is not None:
+            continue
+        tool_op = motion.tool
+        if tool_op is None:
+            site.reason = "no tool"
+            continue
+        tool, why = frames.get(tool_op, "tooldata")
+        if tool is None:
+            site.reason = f"tool {tool_op.text}: {why}"
+            continue
+        wobj = None
+        wobj_op = motion.wobj
+        if wobj_op is not None:
+            wobj, why = frames.get(wobj_op, "wobjdata")
+            if wobj is None:
+                site.reason = f"work object {wobj_op.text}: {why}"
+                continue
+            if not wobj.ufprog:
+                site.reason = (f"work object {wobj_op.text} moves with mechanical unit "
+                               f"{wobj.ufmec!r}: known only at run time")
+                continue
+            if wobj.robhold and tool.robhold:
+                site.reason = "tool and work object are both held by the robot"
+                continue
+        if not tool.robhold and (wobj is None or not wobj.robhold):
+            site.reason = "stationary tool used without a robot-held work object"
+            continue
+        mass = tool.tload.mass if tool.robhold else 0.0
+        tload = motion.optional.get("tload")
+        if tload is not None:
+            load, why = frames.get(tload, "loaddata")
+            if load is None:
+                site.reason = f"\\TLoad {tload.text}: {why}"
+                continue
+            mass = load.mass
+        site.rows = list(range(len(robtargets), len(robtargets) + len(values)))
+        for value, operand in zip(values, site_ops):
+            robtargets.append(value)
+            tools.append(tool)
+            wobjs.append(wobj)
+            masses.append(mass)
+            owners.append(len(sites) - 1)
+            operands.append(operand)
+    return sites, _arrays(robtargets, tools, wobjs, masses, owners, operands)
+
+
+def _arrays(robtargets: list[tuple], tools: list[ToolData], wobjs: list[WobjData | None],
+            masses: list[float], owners: list[int], operands: list[Operand]) -> Targets:
+    n = len(robtargets)
+    if n == 0:
+        return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
+                       Placement.identity(0), np.zeros(0), np.zeros(0, int), [])
+    trans = np.array([r[0] for r in robtargets], dtype=float)
+    rot = np.array([r[1] for r in robtargets], dtype=float)
+    conf = np.array([r[2] for r in robtargets], dtype=float).astype(int)
+    extax = np.array([r[3] for r in robtargets], dtype=float)
+    tool_frames = _poses([t.tframe for t in tools])
+    identity = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+    wobj_u = _poses([w.uframe if w is not None else identity for w in wobjs])
+    wobj_o = _poses([w.oframe if w is not None else identity for w in wobjs])
+    stationary = np.array([not t.robhold for t in tools], dtype=bool)
+    placement = Placement(tool_frames, wobj_u @ wobj_o, stationary)
+    return Targets(pose(trans, rot), conf, extax, placement, np.array(masses, float),
+                   np.array(owners, int), operands)
+
+
+def _poses(frames: list[Any]) -> np.ndarray:
+    """(N,4,4) from rapid Pose values or (trans, rot) tuples; each distinct frame built once."""
+    keys: dict[tuple, int] = {}
+    index = np.empty(len(frames), dtype=int)
+    unique: list[tuple] = []
+    for i, frame in enumerate(frames):
+        key = (tuple(frame.trans), tuple(frame.rot)) if hasattr(frame, "trans") else frame
+        j = keys.get(key)
+        if j is None:
+            j = keys[key] = len(unique)
+            unique.append(key)
+        index[i] = j
+    trans = np.array([u[0] for u in unique], dtype=float)
+    rot = np.array([u[1] for u in unique], dtype=float)
+    return pose(trans, rot)[index]

@@ -1,0 +1,629 @@
+"""Rewrite one RAPID program with compensated targets: the post-processor's main job.
+
+Steps, each vectorised over all targets of the file:
+1. parse; refuse a program rapidfix already compensated (unless forced);
+2. resolve every motion target with its tool and work object (`resolve`);
+3. inverse kinematics on the confdata branch and compensation (`plan`);
+4. for linear and circular moves that become MoveAbsJ, intermediate points
+   until the joint-interpolated path stays within the tolerance (`path`);
+5. span edits: CONST jointtargets and MoveAbsJ (or filtered robtargets), a
+   header comment; every other byte stays as it was;
+6. parse the output again and push what it commands through the model
+   (`verify`): the predicted worst-case TCP deviation.
+
+A MoveL or MoveC whose start is not known before run time (the first move of
+a routine, a loop body or an IF branch) keeps its instruction and gets a
+filtered robtarget instead, so its path stays the controller's line or arc.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rapidfix import __version__
+from rapidfix.atomic import write_bytes_atomic
+from rapidfix.errors.context import Context
+from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
+from rapidfix.postprocess.chain import predecessors
+from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
+from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
+from rapidfix.postprocess.naming import NameAllocator, identifiers_in
+from rapidfix.postprocess.path import Curves, Refinement, refine
+from rapidfix.postprocess.placement import Placement
+from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
+from rapidfix.postprocess.resolve import Declarations, Site, operand_label, resolve
+from rapidfix.postprocess.verify import Expected, predicted_deviation, reparse
+from rapidfix.rapid import MotionInstruction, Program, parse_program
+from rapidfix.rapid.edit import Editor
+from rapidfix.rapid.format import format_declaration
+
+EMIT_CHOICES = ("jointtargets", "robtargets")
+#: optional arguments left off the intermediate points of a subdivided move
+INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
+INTERMEDIATE_ZONE = "z0"
+
+
+@dataclass(frozen=True)
+class RewriteOptions:
+    """How to rewrite: what to emit, the path tolerance (mm), strict and force."""
+
+    emit: str = "jointtargets"
+    path_tolerance_mm: float = 0.1
+    strict: bool = False
+    force: bool = False
+
+    def __post_init__(self) -> None:
+        if self.emit not in EMIT_CHOICES:
+            raise RapidfixError(f"--emit must be one of {', '.join(EMIT_CHOICES)}")
+        if not (math.isfinite(self.path_tolerance_mm) and self.path_tolerance_mm > 0):
+            raise RapidfixError("--path-tolerance must be a positive number of mm")
+
+
+
+def header_options(options: RewriteOptions, comp: Compensator) -> dict[str, str]:
+    """What changes the output besides the input and the model, as the header records it."""
+    recorded = {
+        "emit": options.emit,
+        "path_tolerance_mm": f"{options.path_tolerance_mm:g}",
+        "robot": comp.robot.name,
+    }
+    if comp.decl_paths:
+        recorded["decls_sha256"] = comp.decls_sha256
+    return recorded
+
+
+@dataclass(frozen=True)
+class Skipped:
+    """A motion instruction left as it was, and why."""
+
+    where: str
+    label: str
+    reason: str
+
+    def __str__(self) -> str:
+        return f"{self.where}: {self.label}: {self.reason}"
+
+
+@dataclass
+class RewriteResult:
+    """What a rewrite did; `data` is the output file's bytes."""
+
+    filename: str
+    data: bytes
+    moves_total: int
+    moves_compensated: int
+    moves_filtered: int
+    points_added: int
+    skipped: list[Skipped]
+    worst_predicted_mm: float | None
+    worst_path_mm: float | None
+    header: Header
+    written: bool = False
+    output: str | None = None
+    backup: str | None = None
+    inserted: set[str] = field(default_factory=set)
+
+    def report_lines(self) -> list[str]:
+        """What the command prints."""
+        lines = []
+        if self.written:
+            backup = f" (backup {self.backup})" if self.backup else ""
+            lines.append(f"wrote {self.output}{backup}")
+        lines.append(
+            f"{self.filename}: {self.moves_compensated} of {self.moves_total} moves compensated"
+            f", {self.points_added} intermediate points added"
+            f", {len(self.skipped)} left as they were"
+        )
+        if self.moves_filtered:
+            lines.append(f"  {self.moves_filtered} linear/circular moves kept their instruction "
+                         "with a filtered robtarget (start not known before run time)")
+        if self.worst_predicted_mm is not None:
+            lines.append(
+                f"predicted worst-case TCP deviation from the intended poses: "
+                f"{self.worst_predicted_mm:.6f} mm"
+            )
+        if self.worst_path_mm is not None:
+            lines.append(f"largest predicted deviation from a line or arc between points: "
+                         f"{self.worst_path_mm:.4f} mm")
+        return lines
+
+
+# ---------------------------------------------------------------------------- helpers
+def _stem(site: Site, slot: int) -> str:
+    motion = site.motion
+    operand = site.targets[slot]
+    if operand.form == "name" and operand.name:
+        return operand.name
+    if operand.form in ("offs", "reltool") and operand.name:
+        return f"{operand.name}_{operand.form}"
+    return f"{motion.name}_L{motion.span.line}"
+
+
+def _indent_before(program: Program, offset: int) -> str | None:
+    """Whitespace between the line start and offset, or None if text precedes it."""
+    source = program.source
+    before = source.text[source.line_start(offset):offset]
+    return before if before.strip() == "" else None
+
+
+def _statement_variant(program: Program, motion: MotionInstruction, edits: list[tuple]) -> str:
+    """The statement's text with local (start, end, text) edits (absolute offsets)."""
+    text = program.text
+    start, end = motion.span.start, motion.span.end
+    out, pos = [], start
+    for a, b, new in sorted(edits):
+        out.append(text[pos:a])
+        out.append(new)
+        pos = b
+    out.append(text[pos:end])
+    return "".join(out)
+
+
+def _joint_edits(site: Site, name: str) -> list[tuple]:
+    """Edits turning a MoveL/MoveJ/MoveC statement into MoveAbsJ to `name`."""
+    motion = site.motion
+    edits: list[tuple] = [(motion.name_span.start, motion.name_span.end, "MoveAbsJ")]
+    targets = site.targets
+    if len(targets) == 2:
+        edits.append((targets[0].span.start, targets[1].span.start, ""))
+    to = targets[-1]
+    edits.append((to.value_span.start, to.value_span.end, name))
+    return edits
+
+
+class _Rewriter:
+    """State of one rewrite (kept together so the steps read as methods)."""
+
+    def __init__(self, program: Program, comp: Compensator, options: RewriteOptions) -> None:
+        self.program = program
+        self.comp = comp
+        self.options = options
+        self.robot = comp.robot
+        self.model = comp.model
+        self.editor = Editor(program)
+        taken = identifiers_in(program.text)
+        for decl_program in comp.decls:
+            taken |= identifiers_in(decl_program.text)
+        self.names = NameAllocator(taken)
+        self.skipped: list[Skipped] = []
+        self.decl_blocks: dict[Any, list[str]] = {}
+        self.decl_anchor_order: list[Any] = []
+        self.inserted: set[str] = set()
+        self.refinement: Refinement | None = None
+        self.refined_sites: list[int] = []
+
+    # ------------------------------------------------------------------ plan
+    def plan(self) -> None:
+        """Resolve, solve and compensate every target; decide each move's emission mode."""
+        outside = Declarations(self.comp.decls)
+        self.sites, self.targets = resolve(self.program, outside, self.options.emit)
+        t = self.targets
+        ctx = Context(payload_kg=t.payload_kg)
+        self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement, ctx)
+        for site in self.sites:
+            if site.reason is None:
+                bad = [r for r in site.rows if not self.plan_.ok[r]]
+                if bad:
+                    row = bad[0]
+                    label = operand_label(site.targets, t.operand[row])
+                    site.reason = label + self.plan_.reason[row]
+        # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
+        self.mode: dict[int, str] = {}
+        for i, site in enumerate(self.sites):
+            if site.reason is None:
+                joint = self.options.emit == "jointtargets" and site.kind in "LJC"
+                self.mode[i] = "joint" if joint else "filtered"
+
+    # ------------------------------------------------------------------ paths
+    def _start_state(self, motion: MotionInstruction | None) -> tuple | None:
+        """(q_ideal, q_cmd) where the robot is after `motion`, if known before run time."""
+        if motion is None:
+            return None
+        index = self.site_of.get(id(motion.syntax))
+        if index is not None:
+            if index not in self.mode:
+                return None
+            last = self.sites[index].rows[-1]
+            return self.plan_.q_ideal[last], self.plan_.q_cmd[last]
+        if motion.target_kind == "jointtarget" and motion.name.lower() == "moveabsj":
+            data = motion.target.data if motion.target is not None else None
+            if data is not None and motion.target.static:
+                q = np.radians(np.asarray(data.robax, dtype=float))
+                return q, q
+        return None
+
+    def paths(self) -> None:
+        """Start of every linear/circular move, and intermediate points within the tolerance."""
+        if self.options.emit != "jointtargets":
+            return
+        self.site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
+        before = predecessors(self.program)
+        segs, q0i, q0c = [], [], []
+        for i, site in enumerate(self.sites):
+            if self.mode.get(i) != "joint" or site.kind not in "LC":
+                continue
+            start = self._start_state(before.get(id(site.motion.syntax)))
+            if start is None:
+                self.mode[i] = "filtered"
+                continue
+            segs.append(i)
+            q0i.append(start[0])
+            q0c.append(start[1])
+        self.refined_sites = segs
+        if not segs:
+            return
+        t, p = self.targets, self.plan_
+        to_row = np.array([self.sites[i].rows[-1] for i in segs])
+        via_row = np.array([self.sites[i].rows[0] for i in segs])
+        circular = np.array([self.sites[i].kind == "C" for i in segs])
+        q0i, q0c = np.array(q0i), np.array(q0c)
+        frames = t.placement.take(to_row)
+        start_tcp = frames.tcp(self.robot.fk(q0i))
+        curves = Curves(start_tcp, t.pose[to_row], t.pose[via_row, :3, 3], circular)
+        payload = t.payload_kg[to_row]
+
+        def predict(seg: np.ndarray, q: np.ndarray) -> np.ndarray:
+            flange = self.model.actual_flange(self.robot, q, Context(payload_kg=payload[seg]))
+            return frames.take(seg).tcp(flange)[:, :3, 3]
+
+        def solve(seg: np.ndarray, poses: np.ndarray, seed: np.ndarray) -> tuple:
+            sub: Plan = plan_nearest(self.model, self.robot, poses, seed, frames.take(seg),
+                                     Context(payload_kg=payload[seg]))
+            return sub.q_ideal, sub.q_cmd, sub.ok
+
+        self.refinement = refine(
+            curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
+            self.options.path_tolerance_mm, predict, solve,
+        )
+        for k in np.flatnonzero(self.refinement.failed):
+            self.mode[segs[k]] = "filtered"
+        self.seg_frames, self.seg_payload = frames, payload
+
+    # ------------------------------------------------------------------ emission
+    def _add_declaration(self, site: Site, slot: int, text: str) -> None:
+        """Queue a declaration beside the robtarget it replaces, else in the motion's module."""
+        motion = site.motion
+        operand = site.targets[slot]
+        decl = operand.declaration
+        if (operand.form == "name" and decl is not None and decl.module == motion.module
+                and (decl.routine is None or decl.routine.lower() == motion.routine.lower())):
+            anchor: Any = ("after", id(decl))
+            local = decl.local
+            target: Any = decl
+        else:
+            anchor = ("module", motion.module.lower())
+            local = False
+            target = next(m for m in self.program.modules if m.name == motion.module)
+        if anchor not in self.decl_blocks:
+            self.decl_blocks[anchor] = []
+            self.decl_anchor_order.append((anchor, target))
+        prefix = "LOCAL " if local and not text.startswith("LOCAL") else ""
+        self.decl_blocks[anchor].append(prefix + text)
+
+    def emit(self) -> tuple[Expected, int]:
+        """All span edits; returns what verification must find and the output's move count."""
+        t, p = self.targets, self.plan_
+        joint_sites = [i for i in sorted(self.mode) if self.mode[i] == "joint"]
+        filtered_sites = [i for i in sorted(self.mode) if self.mode[i] == "filtered"]
+        # intermediate points per refined site
+        inter: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # q_cmd, intended TCP
+        if self.refinement is not None and self.refinement.seg.size:
+            r = self.refinement
+            bounds = np.searchsorted(r.seg, np.arange(len(self.refined_sites) + 1))
+            for k, site_index in enumerate(self.refined_sites):
+                lo, hi = bounds[k], bounds[k + 1]
+                if hi > lo and self.mode.get(site_index) == "joint":
+                    inter[site_index] = (r.q_cmd[lo:hi], r.pose[lo:hi])
+        # joint literals for all destinations and intermediate points at once
+        dest_rows = np.array([self.sites[i].rows[-1] for i in joint_sites], dtype=int)
+        inter_rows = [(i, j) for i in joint_sites if i in inter for j in range(len(inter[i][0]))]
+        q_all = np.concatenate(
+            [p.q_cmd[dest_rows]] + [inter[i][0] for i in joint_sites if i in inter]
+        ) if joint_sites else np.zeros((0, 6))
+        ext_all = np.concatenate(
+            [t.extax[dest_rows]]
+            + [np.repeat(t.extax[self.sites[i].rows[-1]][None], len(inter[i][0]), 0)
+               for i in joint_sites if i in inter]
+        ) if joint_sites else np.zeros((0, 6))
+        literals = jointtarget_literals(np.degrees(q_all), ext_all)
+        dest_literal = dict(zip(joint_sites, literals[: len(joint_sites)]))
+        inter_literal = dict(zip(inter_rows, literals[len(joint_sites):]))
+        # filtered robtargets
+        f_rows = [r for i in filtered_sites for r in self.sites[i].rows]
+        f_tcp = t.placement.take(np.array(f_rows, dtype=int)).tcp(
+            self.robot.fk(p.q_cmd[f_rows])) if f_rows else np.zeros((0, 4, 4))
+        f_conf = self.robot.confdata(p.q_cmd[f_rows]) if f_rows else np.zeros((0, 4), int)
+        f_literal = dict(zip(f_rows, robtarget_literals(f_tcp, f_conf, t.extax[f_rows])))
+        self._filtered_declarations(filtered_sites, f_literal)
+
+        jt_names: dict[tuple[str, str], str] = {}
+
+        def jointtarget_name(stem: str, literal: str, site: Site) -> str:
+            key = (stem.lower(), literal)
+            name = jt_names.get(key)
+            if name is None:
+                name = jt_names[key] = self.names.allocate(stem, "jt_")
+                self._add_declaration(site, len(site.targets) - 1,
+                                      format_declaration("CONST", "jointtarget", name, literal))
+            return name
+
+        # output motion index of every input motion (intermediates come just before it)
+        added_before: dict[int, int] = {}
+        for i in joint_sites:
+            site = self.sites[i]
+            motion = site.motion
+            stem = _stem(site, len(site.targets) - 1)
+            name = jointtarget_name(stem, dest_literal[i], site)
+            edits = _joint_edits(site, name)
+            for start, end, text in edits:
+                self.editor.replace((start, end), text)
+            if i in inter:
+                indent = _indent_before(self.program, motion.span.start)
+                sep = "\n" + indent if indent is not None else " "
+                drops = [(op.span.start, op.span.end, "") for key, op in motion.optional.items()
+                         if key in INTERMEDIATE_DROPS]
+                zone = motion.zone
+                zone_edit = ([(zone.value_span.start, zone.value_span.end, INTERMEDIATE_ZONE)]
+                             if zone is not None and zone.value_span is not None else [])
+                lines = []
+                for j in range(len(inter[i][0])):
+                    sub = jointtarget_name(f"{stem}_{j + 1}", inter_literal[(i, j)], site)
+                    self.inserted.add(sub)
+                    variant = _statement_variant(
+                        self.program, motion, _joint_edits(site, sub) + drops + zone_edit)
+                    lines.append(variant + sep)
+                self.editor.insert(motion.span.start, "".join(lines))
+                added_before[id(motion.syntax)] = len(inter[i][0])
+        self._flush_declarations()
+        return self._expected(joint_sites, filtered_sites, inter, added_before)
+
+    def _filtered_declarations(self, filtered_sites: list[int], f_literal: dict[int, str]) -> None:
+        """Filtered robtargets: in the declaration when only compensated moves use it,
+        inline in place of an aggregate, else as a new CONST robtarget."""
+        if not filtered_sites:
+            return
+        t = self.targets
+        by_decl: dict[int, list[int]] = {}
+        for i in filtered_sites:
+            for row in self.sites[i].rows:
+                op = t.operand[row]
+                if op.form == "name" and op.declaration is not None:
+                    by_decl.setdefault(id(op.declaration), []).append(row)
+        uses = _identifier_counts(self.program.text)
+        replace_decl: dict[int, str] = {}
+        for rows in by_decl.values():
+            decl = t.operand[rows[0]].declaration
+            literals = {f_literal[r] for r in rows}
+            only_here = uses.get(decl.key, 0) == 1 + len(rows)
+            if len(literals) == 1 and only_here and decl.value_span is not None:
+                replace_decl[id(decl)] = literals.pop()
+                self.editor.replace(decl.value_span, replace_decl[id(decl)])
+        names: dict[tuple[str, str], str] = {}
+        for i in filtered_sites:
+            site = self.sites[i]
+            for slot, row in enumerate(site.rows):
+                op = t.operand[row]
+                literal = f_literal[row]
+                if op.form == "name" and op.declaration is not None \
+                        and id(op.declaration) in replace_decl:
+                    continue
+                if op.form == "inline":
+                    self.editor.replace(op.value_span, literal)
+                    continue
+                key = (_stem(site, slot).lower(), literal)
+                name = names.get(key)
+                if name is None:
+                    name = names[key] = self.names.allocate(_stem(site, slot), "ft_")
+                    self._add_declaration(site, slot, format_declaration(
+                        "CONST", "robtarget", name, literal))
+                self.editor.replace(op.value_span, name)
+
+    def _flush_declarations(self) -> None:
+        for anchor, target in self.decl_anchor_order:
+            text = "\n".join(self.decl_blocks[anchor])
+            if anchor[0] == "after":
+                self.editor.insert_declaration_after(target, text)
+            else:
+                self.editor.insert_declaration(target, text)
+
+    def _expected(self, joint_sites: list[int], filtered_sites: list[int],
+                  inter: dict[int, tuple], added_before: dict[int, int]) -> tuple[Expected, int]:
+        """Where each compensated pose sits in the output, and its intended TCP."""
+        out_index: dict[int, int] = {}
+        offset = 0
+        for n, motion in enumerate(self.program.motions):
+            offset += added_before.get(id(motion.syntax), 0)
+            out_index[id(motion.syntax)] = n + offset
+        t = self.targets
+        motion_idx, slots, rows = [], [], []
+        for i in sorted(joint_sites + filtered_sites):
+            site = self.sites[i]
+            m = out_index[id(site.motion.syntax)]
+            if self.mode[i] == "joint":
+                motion_idx.append(m)
+                slots.append(0)
+                rows.append(site.rows[-1])
+            else:
+                for slot, row in enumerate(site.rows):
+                    motion_idx.append(m)
+                    slots.append(slot)
+                    rows.append(row)
+        rows_a = np.array(rows, dtype=int)
+        tcp = [t.pose[rows_a]]
+        placement = t.placement.take(rows_a)
+        payload = [t.payload_kg[rows_a]]
+        frames_parts = [placement]
+        segment_of = {site: k for k, site in enumerate(self.refined_sites)}
+        for i in joint_sites:
+            if i not in inter:
+                continue
+            poses = inter[i][1]
+            m = out_index[id(self.sites[i].motion.syntax)]
+            count = len(poses)
+            motion_idx.extend(range(m - count, m))
+            slots.extend([0] * count)
+            tcp.append(poses)
+            k = segment_of[i]
+            frames_parts.append(self.seg_frames.take(np.full(count, k)))
+            payload.append(np.full(count, self.seg_payload[k]))
+        placement_all = Placement(
+            np.concatenate([f.tool for f in frames_parts]),
+            np.concatenate([f.wobj for f in frames_parts]),
+            np.concatenate([f.stationary for f in frames_parts]),
+        )
+        expected = Expected(np.array(motion_idx, dtype=int), np.array(slots, dtype=int),
+                            np.concatenate(tcp), placement_all, np.concatenate(payload))
+        return expected, len(self.program.motions) + sum(added_before.values())
+
+
+def _module_indent(program: Program) -> str:
+    """Indentation of the first item of the first module (for the header lines)."""
+    module = program.modules[0]
+    items = module.syntax.items
+    if items:
+        indent = _indent_before(program, items[0].start)
+        if indent:
+            return indent
+    return "  "
+
+
+def _identifier_counts(text: str) -> dict[str, int]:
+    import re
+    from collections import Counter
+
+    return Counter(w.lower() for w in re.findall(r"[A-Za-z][A-Za-z0-9_]*", text))
+
+
+def _strip_old_header(editor: Editor, text: str) -> None:
+    """Remove the header lines of an earlier compensation (with --force)."""
+    import re
+
+    for match in re.finditer(r"\r?\n[ \t]*![ \t]*" + MARK + r"[^\r\n]*", text):
+        editor.replace((match.start(), match.end()), "")
+
+
+# ---------------------------------------------------------------------------- API
+def rewrite_source(
+    data: bytes, filename: str, comp: Compensator, options: RewriteOptions
+) -> RewriteResult:
+    """Compensate one program given as bytes; returns the new bytes and what was done."""
+    program = parse_program(data, filename)
+    old = read_header(program.text)
+    if old is not None and not options.force:
+        raise RapidSemanticError(
+            f"already compensated by rapidfix {old.version} (model {old.model_path})",
+            file=filename,
+            hint="use --force to compensate it again",
+        )
+    job = _Rewriter(program, comp, options)
+    job.plan()
+    job.paths()
+    expected, motion_count = job.emit()
+    for site in job.sites:
+        if site.reason is not None:
+            job.skipped.append(Skipped(site.where, site.label, site.reason))
+    compensated = len(job.mode)
+    filtered = sum(1 for i, m in job.mode.items()
+                   if m == "filtered" and options.emit == "jointtargets")
+    points = 0
+    worst_path = None
+    if job.refinement is not None:
+        keep = np.array([job.mode.get(i) == "joint" for i in job.refined_sites], dtype=bool)
+        points = int(np.isin(job.refinement.seg, np.flatnonzero(keep)).sum())
+        if keep.any():
+            worst_path = float(job.refinement.deviation[keep].max())
+    summary = (f"{compensated} of {len(job.sites)} moves compensated, {points} points added, "
+               f"{len(job.skipped)} left as they were")
+    header = Header(
+        version=__version__,
+        model_path=comp.model_path,
+        model_sha256=comp.model_sha256,
+        input_sha256=sha256_bytes(data),
+        options=header_options(options, comp),
+        summary=summary,
+    )
+    if old is not None:
+        _strip_old_header(job.editor, program.text)
+    job.editor.insert(program.modules[0].header_end, header.render(
+        _module_indent(program), "\n"))
+    output = job.editor.render()
+    checked = reparse(output, filename)
+    if len(checked.motions) != motion_count:
+        raise RapidSemanticError(
+            f"the rewritten program has {len(checked.motions)} motion instructions, "
+            f"{motion_count} were expected; nothing was written",
+            file=filename, hint="please report this as a rapidfix bug")
+    deviation = predicted_deviation(comp.model, comp.robot, checked.motions, expected)
+    worst = float(deviation.max()) if deviation.size else None
+    return RewriteResult(
+        filename=filename,
+        data=output,
+        moves_total=len(job.sites),
+        moves_compensated=compensated,
+        moves_filtered=filtered,
+        points_added=points,
+        skipped=job.skipped,
+        worst_predicted_mm=worst,
+        worst_path_mm=worst_path,
+        header=header,
+        inserted=job.inserted,
+    )
+
+
+def backup_path(path: Path) -> Path:
+    """A free backup name beside `path`: PROG.mod.bak, PROG.mod.bak2, …"""
+    candidate = path.with_name(path.name + ".bak")
+    n = 1
+    while candidate.exists():
+        n += 1
+        candidate = path.with_name(f"{path.name}.bak{n}")
+    return candidate
+
+
+def rewrite_file(
+    source: str | Path,
+    target: str | Path,
+    comp: Compensator,
+    options: RewriteOptions,
+    *,
+    in_place: bool = False,
+    name: str | None = None,
+) -> RewriteResult:
+    """Rewrite `source` into `target` atomically; the input is only replaced with in_place
+    (a backup is written first). With strict options and skipped targets nothing is written.
+    `name` is how messages call the file (default: the source path)."""
+    source, target = Path(source), Path(target)
+    same = target.exists() and source.exists() and target.resolve() == source.resolve()
+    if same and not in_place:
+        raise OutputExistsError("the output would overwrite the input", file=target,
+                                hint="choose another -o, or use --in-place (keeps a backup)")
+    data = source.read_bytes()
+    result = rewrite_source(data, name or str(source), comp, options)
+    if result.skipped and options.strict:
+        return result
+    if in_place:
+        backup = backup_path(source)
+        write_bytes_atomic(backup, data)
+        result.backup = str(backup)
+        target = source
+    write_bytes_atomic(target, result.data)
+    result.written = True
+    result.output = str(target)
+    return result
+
+
+__all__ = [
+    "RewriteOptions",
+    "RewriteResult",
+    "Skipped",
+    "backup_path",
+    "header_options",
+    "rewrite_file",
+    "rewrite_source",
+]

@@ -1,0 +1,108 @@
+"""`rapidfix rewrite` as a user runs it: exit status, strict, force, in-place, --decls."""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+
+import pytest
+
+from rapidfix.cli import main
+from rapidfix.postprocess.header import read_header
+from rapidfix.rapid import load_program
+
+EXTAX = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
+USES_OUTSIDE_DATA = """MODULE Station
+  CONST robtarget pA:=[[100,50,0],[0,0.258819045,0.965925826,0],[0,0,-1,1],EXTAX];
+  PROC main()
+    MoveJ pA, v100, fine, tBar\\WObj:=wPlate;
+  ENDPROC
+ENDMODULE
+"""
+DECLS = """MODULE BaseData(SYSMODULE)
+  PERS tooldata tBar:=[TRUE,[[0,0,100],[1,0,0,0]],[1.2,[0,0,60],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPlate:=[FALSE,TRUE,"",[[850,80,450],[0.923879533,0,-0.382683432,0]],
+                         [[0,0,0],[1,0,0,0]]];
+ENDMODULE
+"""
+
+
+@pytest.fixture
+def program(samples, tmp_path):
+    path = tmp_path / "ballbar.mod"
+    shutil.copy(samples / "ballbar.mod", path)
+    return path
+
+
+def test_rewrite_writes_header_and_exit_zero(cell, program, tmp_path, capsys):
+    out = tmp_path / "out.mod"
+    assert main(["rewrite", str(program), "--model", str(cell["model_path"]), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "predicted worst-case TCP deviation" in text
+    header = read_header(out.read_text())
+    model_sha = hashlib.sha256(cell["model_path"].read_bytes()).hexdigest()
+    assert header.model_sha256 == model_sha
+    assert header.input_sha256 == hashlib.sha256(program.read_bytes()).hexdigest()
+    assert header.options["emit"] == "jointtargets" and header.options["path_tolerance_mm"] == "0.1"
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_refuses_compensated_program_unless_forced(cell, program, tmp_path, capsys):
+    out = tmp_path / "out.mod"
+    model = str(cell["model_path"])
+    assert main(["rewrite", str(program), "--model", model, "-o", str(out)]) == 0
+    again = tmp_path / "again.mod"
+    assert main(["rewrite", str(out), "--model", model, "-o", str(again)]) == 1
+    assert "already compensated" in capsys.readouterr().err
+    assert not again.exists()
+    assert main(["rewrite", str(out), "--model", model, "-o", str(again), "--force"]) == 0
+    text = again.read_text()
+    assert text.count("rapidfix-compensated version") == 1  # the old header was replaced
+    load_program(again)
+
+
+def test_never_overwrites_the_input_unless_in_place(cell, program, capsys):
+    model = str(cell["model_path"])
+    original = program.read_bytes()
+    assert main(["rewrite", str(program), "--model", model, "-o", str(program)]) == 1
+    assert "overwrite the input" in capsys.readouterr().err
+    assert program.read_bytes() == original
+    assert main(["rewrite", str(program), "--model", model, "--in-place"]) == 0
+    backup = program.with_name(program.name + ".bak")
+    assert backup.read_bytes() == original
+    assert b"MoveAbsJ" in program.read_bytes()
+
+
+def test_warnings_exit_three_and_strict_writes_nothing(cell, tmp_path, capsys):
+    prog = tmp_path / "station.mod"
+    prog.write_text(USES_OUTSIDE_DATA.replace("EXTAX", EXTAX))
+    out = tmp_path / "out.mod"
+    model = str(cell["model_path"])
+    assert main(["rewrite", str(prog), "--model", model, "-o", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert f"{prog}:4: MoveJ pA: tool tBar" in err and "--decls" in err
+    assert out.exists() and b"MoveAbsJ" not in out.read_bytes()
+    strict = tmp_path / "strict.mod"
+    assert main(["rewrite", str(prog), "--model", model, "-o", str(strict), "--strict"]) == 1
+    assert not strict.exists()
+    decls = tmp_path / "base.sys"
+    decls.write_text(DECLS)
+    assert (
+        main(["rewrite", str(prog), "--model", model, "-o", str(out), "--decls", str(decls)]) == 0
+    )
+    assert "MoveAbsJ jt_pA, v100, fine, tBar\\WObj:=wPlate;" in out.read_text()
+
+
+def test_bad_options_are_user_errors(cell, program, tmp_path, capsys):
+    model = str(cell["model_path"])
+    out = str(tmp_path / "o.mod")
+    assert (
+        main(["rewrite", str(program), "--model", model, "-o", out, "--path-tolerance", "0"]) == 1
+    )
+    assert "path-tolerance" in capsys.readouterr().err
+    assert (
+        main(["rewrite", str(program), "--model", model, "-o", out, "--robot", "IRB120-3/0.58"])
+        == 1
+    )
+    assert "made for robot" in capsys.readouterr().err
+    assert main(["rewrite", str(program), "--model", model]) == 1

@@ -1,0 +1,80 @@
+"""What the rewrite keeps: optional arguments, line endings, encodings, other text."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rapidfix.postprocess.ballbar_program import ballbar_program
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.rapid import parse_program
+
+OPTIONAL = [
+    (
+        "MoveL pBB01, v50\\T:=2, z5\\Z:=3, tBallbar\\WObj:=wobjBallbar;",
+        "MoveAbsJ jt_pBB01, v50\\T:=2, z5\\Z:=3, tBallbar\\WObj:=wobjBallbar;",
+    ),
+    (
+        "MoveL \\Conc, pBB01, v50\\V:=60, fine\\Inpos:=inpos20, tBallbar\\WObj:=wobjBallbar;",
+        "MoveAbsJ \\Conc, jt_pBB01, v50\\V:=60, fine\\Inpos:=inpos20, tBallbar\\WObj:=wobjBallbar;",
+    ),
+    (
+        "MoveL pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar\\TLoad:=load0;",
+        "MoveAbsJ jt_pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar\\TLoad:=load0;",
+    ),
+]
+
+
+@pytest.mark.parametrize(("line", "expected"), OPTIONAL)
+def test_optional_arguments_are_kept(comp, line, expected):
+    text = ballbar_program().replace(
+        "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar;", line, 1
+    )
+    if "idMove" in line:
+        text = text.replace("    PROC main()", "    VAR syncident idMove;\n    PROC main()", 1)
+    result = rewrite_source(text.encode(), "opt.mod", comp, RewriteOptions(path_tolerance_mm=0.05))
+    out = result.data.decode()
+    assert expected in out
+    assert not result.skipped
+    # intermediate points of this move, if any, drop \T, \Z, \Inpos and \ID and fly by in z0
+    for statement in out.splitlines():
+        if "jt_pBB01_" in statement and "MoveAbsJ" in statement:
+            assert "\\T:=" not in statement and "\\Z:=" not in statement
+            assert "\\Inpos" not in statement and "\\ID" not in statement
+            assert ", z0, tBallbar" in statement
+
+
+def test_corr_has_no_joint_form(comp):
+    text = ballbar_program().replace(
+        "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar;",
+        "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;",
+        1,
+    )
+    result = rewrite_source(text.encode(), "corr.mod", comp, RewriteOptions())
+    assert len(result.skipped) == 1 and "\\Corr" in result.skipped[0].reason
+    assert "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;" in result.data.decode()
+
+
+def test_crlf_and_cp1252_are_kept(comp):
+    text = ballbar_program().replace("! Ballbar test", "! Kugelstab-Prüfung: Ballbar test", 1)
+    data = text.replace("\n", "\r\n").encode("cp1252")
+    result = rewrite_source(data, "legacy.mod", comp, RewriteOptions())
+    assert result.moves_compensated == 21
+    out = result.data
+    assert b"Kugelstab-Pr\xfcfung" in out  # still cp1252, not UTF-8
+    assert out.count(b"\r\n") == out.count(b"\n")  # every line ends CRLF
+    parse_program(out, "legacy_out.mod")
+
+
+def test_rewrite_is_deterministic_and_inputs_are_bytes_in_bytes_out(comp):
+    data = ballbar_program().encode()
+    a = rewrite_source(data, "a.mod", comp, RewriteOptions())
+    b = rewrite_source(data, "a.mod", comp, RewriteOptions())
+    assert a.data == b.data
+    # a program with no motion at all gets only the header
+    empty = b'MODULE Empty\n  PROC main()\n    TPWrite "hi";\n  ENDPROC\nENDMODULE\n'
+    result = rewrite_source(empty, "e.mod", comp, RewriteOptions())
+    lines = result.data.decode().splitlines(keepends=True)
+    kept = [line for line in lines if "rapidfix-compensated" not in line]
+    assert "".join(kept).encode() == empty and result.worst_predicted_mm is None
+    assert np.isclose(result.moves_total, 0)

@@ -1,0 +1,258 @@
+"""Pieces of the post-processor on their own: names, header, curves, MoveC, move chains."""
+
+from __future__ import annotations
+
+import itertools
+import re
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from rapidfix.postprocess.header import Header, is_compensated, read_header
+from rapidfix.postprocess.naming import MAX_IDENTIFIER, NameAllocator
+from rapidfix.postprocess.path import Curves
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.rapid import load_program, parse_program
+
+IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    taken=st.lists(st.from_regex(r"[A-Za-z][A-Za-z0-9_]{0,40}", fullmatch=True), max_size=30),
+    stems=st.lists(st.text(min_size=0, max_size=45), min_size=1, max_size=30),
+)
+def test_allocated_names_are_valid_and_unique(taken, stems):
+    names = NameAllocator(taken)
+    used = {t.lower() for t in taken}
+    for stem in stems:
+        name = names.allocate(stem)
+        assert IDENT.match(name) and len(name) <= MAX_IDENTIFIER
+        assert name.lower() not in used
+        used.add(name.lower())
+
+
+def test_names_follow_the_robtarget_and_avoid_collisions():
+    names = NameAllocator(["JT_P10", "jt_p20"])
+    assert names.allocate("p30") == "jt_p30"
+    assert names.allocate("p10") == "jt_p10_2"  # case-insensitive collision
+    assert names.allocate("p20") == "jt_p20_2"
+    assert names.allocate("p20") == "jt_p20_3"
+    long = names.allocate("x" * 40)
+    assert len(long) == MAX_IDENTIFIER and long.startswith("jt_x")
+
+
+def test_header_round_trip():
+    header = Header(
+        "1.2.3",
+        "models/cell model.json",
+        "a" * 64,
+        "b" * 64,
+        {"emit": "jointtargets", "path_tolerance_mm": "0.1"},
+        "3 moves",
+    )
+    text = "MODULE M" + header.render("  ", "\r\n") + "\r\nENDMODULE\r\n"
+    back = read_header(text)
+    assert back.model_sha256 == "a" * 64 and back.input_sha256 == "b" * 64
+    assert back.options == {"emit": "jointtargets", "path_tolerance_mm": "0.1"}
+    assert back.version == "1.2.3" and back.model_path == "models/cell model.json"
+    assert is_compensated(text) and not is_compensated("MODULE M\n! rapidfix rocks\nENDMODULE\n")
+
+
+def test_curves_follow_lines_and_circles():
+    rng = np.random.default_rng(4)
+    m = 20
+    centre = rng.uniform(-500, 500, (m, 3))
+    radius = rng.uniform(10, 300, m)
+    basis = Rotation.random(m, random_state=5).as_matrix()
+    angles = np.sort(rng.uniform(0.1, 5.5, (m, 3)), axis=1)
+    angles[:, 0] = 0.0
+
+    def point(k):
+        a = angles[:, k]
+        return centre + radius[:, None] * (
+            np.cos(a)[:, None] * basis[:, :, 0] + np.sin(a)[:, None] * basis[:, :, 1]
+        )
+
+    start, end = np.tile(np.eye(4), (m, 1, 1)), np.tile(np.eye(4), (m, 1, 1))
+    start[:, :3, 3], end[:, :3, 3] = point(0), point(2)
+    arc = Curves(start, end, point(1), np.ones(m, dtype=bool))
+    seg = np.repeat(np.arange(m), 9)
+    s = np.tile(np.linspace(0, 1, 9), m)
+    pos = arc.positions(seg, s)
+    # on the circle, from the start to the end, through the circle point's side
+    assert np.allclose(np.linalg.norm(pos - centre[seg], axis=1), radius[seg])
+    assert np.allclose(pos[::9], point(0)) and np.allclose(pos[8::9], point(2))
+    assert np.allclose(arc.distance(seg, pos), 0.0, atol=1e-9)
+    swept = np.angle(np.exp(1j * (angles[:, 2] - angles[:, 0])))
+    mid = arc.positions(np.arange(m), np.full(m, 0.5))
+    expected_mid = angles[:, 2] / 2.0
+    want = centre + radius[:, None] * (
+        np.cos(expected_mid)[:, None] * basis[:, :, 0]
+        + np.sin(expected_mid)[:, None] * basis[:, :, 1]
+    )
+    assert np.allclose(mid, want) and swept.shape == (m,)
+    line = Curves(start, end, point(1), np.zeros(m, dtype=bool))
+    off = (
+        point(0)
+        + 5.0
+        * np.cross(point(2) - point(0), basis[:, :, 2])
+        / np.linalg.norm(np.cross(point(2) - point(0), basis[:, :, 2]), axis=1)[:, None]
+    )
+    assert np.allclose(line.distance(np.arange(m), off), 5.0)
+
+
+def _circle_program(robot):
+    """MoveJ to a start, then one MoveC over half the ballbar circle (confdata from IK)."""
+
+    def target(x, y):
+        extax = ",".join(["9E+09"] * 6)
+        return f"[[{x},{y},0],[0,0.258819045,0.965925826,0],[CONF],[{extax}]]"
+
+    text = f"""MODULE Circle
+  PERS tooldata tBar:=[TRUE,[[0,0,100],[1,0,0,0]],[1.2,[0,0,60],[1,0,0,0],0,0,0]];
+  PERS wobjdata wPlate:=[FALSE,TRUE,"",[[850,80,450],[0.923879533,0,-0.382683432,0]],
+                         [[0,0,0],[1,0,0,0]]];
+  CONST robtarget pS:={target(100, 0)};
+  CONST robtarget pM:={target(0, 100)};
+  CONST robtarget pE:={target(-100, 0)};
+  PROC main()
+    MoveJ pS, v100, fine, tBar\\WObj:=wPlate;
+    MoveC pM, pE, v100, z1, tBar\\WObj:=wPlate;
+  ENDPROC
+ENDMODULE
+"""
+    program = parse_program(text.replace("CONF", "0,0,0,0"))
+    conf = []
+    for name in ("ps", "pm", "pe"):
+        motion = next(
+            m for m in program.motions if any(t.name and t.name.lower() == name for t in m.targets)
+        )
+        t = next(t for t in motion.targets if t.name and t.name.lower() == name).data
+        T = (
+            _frame(*motion.wobj.data.uframe.__dict__.values())
+            @ _frame(t.trans, t.rot)
+            @ np.linalg.inv(_frame(motion.tool.data.tframe.trans, motion.tool.data.tframe.rot))
+        )
+        q, _ = robot.ik_nearest(T[None], np.radians([[5, 25, 30, 0, -20, 10]]))
+        conf.append(",".join(str(c) for c in robot.confdata(q)[0]))
+    out = text
+    for c in conf:
+        out = out.replace("CONF", c, 1)
+    return out
+
+
+def _frame(trans, rot):
+    T = np.eye(4)
+    w, x, y, z = rot
+    T[:3, :3] = Rotation.from_quat([x, y, z, w]).as_matrix()
+    T[:3, 3] = trans
+    return T
+
+
+def test_movec_becomes_joint_moves_along_the_arc(cell, comp, tmp_path):
+    model, robot = cell["model"], cell["robot"]
+    text = _circle_program(robot)
+    tol = 0.05
+    options = RewriteOptions(path_tolerance_mm=tol)
+    result = rewrite_source(text.encode(), "circle.mod", comp, options)
+    assert not result.skipped and result.points_added > 3
+    out_path = tmp_path / "circle.mod"
+    out_path.write_bytes(result.data)
+    out = load_program(out_path)
+    assert [m.name for m in out.motions] == ["MoveAbsJ"] * len(out.motions)
+    assert "MoveAbsJ jt_pE, v100, z1, tBar\\WObj:=wPlate;" in out.text  # CirPoint removed
+    jts = {
+        d.name.lower(): np.radians(np.asarray(d.data.robax, dtype=float))
+        for d in out.declarations
+        if d.type_key == "jointtarget"
+    }
+    chain = [jts[m.target.text.lower()] for m in out.motions]
+    wobj = _frame([850, 80, 450], [0.923879533, 0, -0.382683432, 0])
+    tool = _frame([0, 0, 100], [1, 0, 0, 0])
+    s = np.linspace(0, 1, 31)[:, None]
+    worst = 0.0
+    for q0, q1 in itertools.pairwise(chain):
+        tcp = model.actual_flange(robot, q0 + s * (q1 - q0)) @ tool
+        local = (np.linalg.inv(wobj) @ tcp)[:, :3, 3]  # the arc: radius 100 about the origin
+        dist = np.hypot(np.hypot(local[:, 0], local[:, 1]) - 100.0, local[:, 2])
+        worst = max(worst, dist.max())
+    assert worst <= tol
+
+
+def test_first_move_of_a_loop_keeps_its_line(comp, samples):
+    """A MoveL whose start is known only at run time keeps MoveL, with a filtered target."""
+    text = (
+        (samples / "ballbar.mod")
+        .read_text()
+        .replace("        WaitTime 0.5;\n", "        WHILE TRUE DO\n", 1)
+        .replace("        MoveL Offs(pBB18", "        ENDWHILE\n        MoveL Offs(pBB18", 1)
+    )
+    result = rewrite_source(text.encode(), "loop.mod", comp, RewriteOptions())
+    out = result.data.decode()
+    # used by this move only: the declaration itself holds the filtered pose
+    assert "MoveL pBB01, v50, fine" in out and "pBB01:=[[98.4808,17.3648,0]," not in out
+    assert "MoveAbsJ jt_pBB02, v50, fine" in out
+    # after ENDWHILE the start is unknown again (last move of the loop or before it)
+    assert "MoveL ft_pBB18_offs, v200, z10" in out
+    assert result.moves_filtered == 2 and not result.skipped
+
+
+def test_placement_matches_the_kinematics_frames_for_both_tool_kinds():
+    from rapidfix.kinematics.frames import Tool, WorkObject, flange_target
+    from rapidfix.postprocess.placement import Placement
+
+    rng = np.random.default_rng(2)
+    n = 6
+    poses = np.tile(np.eye(4), (3, n, 1, 1))
+    for k in range(3):
+        poses[k, :, :3, :3] = Rotation.random(n, random_state=k).as_matrix()
+        poses[k, :, :3, 3] = rng.uniform(-300, 300, (n, 3))
+    tool, wobj, target = poses
+    stationary = np.array([False, True] * (n // 2))
+    placement = Placement(tool, wobj, stationary)
+    flange = placement.flange(target)
+    for i in range(n):
+        want = flange_target(
+            target[i],
+            Tool(tool[i], robhold=not stationary[i]),
+            WorkObject(uframe=wobj[i], robhold=bool(stationary[i])),
+        )
+        assert np.allclose(flange[i], want)
+    assert np.allclose(placement.tcp(flange), target)
+
+
+def test_ik_on_conf_gives_what_the_kinematics_ik_conf_gives(cell):
+    from rapidfix.postprocess.plan import ik_on_conf
+
+    robot = cell["robot"]
+    rng = np.random.default_rng(8)
+    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (400, 6))
+    q[::10, 4] = 0.0  # wrist singular
+    q[5::10, 0] = np.radians(90.0)  # on a quadrant boundary
+    poses = robot.fk(q)
+    conf = robot.confdata(q)
+    conf[::3] = np.column_stack(
+        [rng.integers(-2, 2, (len(conf[::3]), 3)), rng.integers(0, 8, len(conf[::3]))]
+    )
+    poses[7, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
+    want_q, want_status = robot.ik_conf(poses, conf)
+    got_q, got_status = ik_on_conf(robot, poses, conf)
+    assert np.array_equal(np.asarray(want_status), np.asarray(got_status))
+    assert np.allclose(np.nan_to_num(want_q, nan=7.0), np.nan_to_num(got_q, nan=7.0))
+    assert {0, 1, 4}.issubset(set(np.asarray(got_status).tolist()))
+
+
+def test_motion_targets_shortcut_matches_the_program_model(samples):
+    from rapidfix.postprocess.resolve import motion_targets
+
+    count = 0
+    for path in sorted(samples.iterdir()):
+        if path.suffix.lower() not in (".mod", ".prg"):
+            continue
+        for motion in load_program(path).motions:
+            assert motion_targets(motion) == motion.targets
+            count += 1
+    assert count > 50
