@@ -22,6 +22,14 @@ EXIT_WARNINGS = 3
 # Subcommand modules under rapidfix.commands, in the order `--help` lists them.
 COMMANDS: tuple[str, ...] = (
     "check",
+    "targets",
+    "upload",
+    "fit",
+    "demo",
+    "simulate",
+    "rewrite",
+    "batch",
+    "diagnose",
 )
 
 

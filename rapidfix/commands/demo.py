@@ -120,6 +120,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"report:       {html_path}")
     print(f"report data:  {json_path}")
     print(format_table(programs))
+    # closing the loop: a robot with a hidden effect, its per-joint fit, the diagnosis
+    from rapidfix.diagnose.demo import demo_loop, format_demo
+
+    print(format_demo(demo_loop(out / "diagnosis", seed=args.seed)))
     for text in warned:
         print(f"rapidfix: warning: {text}", file=sys.stderr)
     return 3 if warned else 0

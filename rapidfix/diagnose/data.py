@@ -1,0 +1,48 @@
+"""The diagnosis' inputs: measured point sets as the fitter sees them, and the noise level.
+
+A points file (calibration or validation) becomes `MeasuredPoints`: commanded
+joints, tracker-frame positions, and the context each row ran under (payload from
+the file or the setup's default, time, temperature, and the previous row's pose
+for the motion direction, rows taken in file order).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from rapidfix.errors.context import Context
+from rapidfix.errors.fit_effects import MeasuredPoints
+from rapidfix.measure.files import PointTable, Setup
+
+#: per-axis tracker σ assumed when neither the model nor the setup states one (mm)
+DEFAULT_SIGMA_MM = 0.01
+#: mean length of a 3-D vector of independent N(0, σ²) coordinates, in units of σ
+MEAN_NORM_PER_SIGMA = float(np.sqrt(8.0 / np.pi))
+
+
+def measured_points(table: PointTable, setup: Setup) -> MeasuredPoints:
+    """A points table as the fitter's input (payload defaults to the setup's)."""
+    payload = table.payload_kg if table.payload_kg is not None else setup.payload_kg
+    ctx = Context.from_rows(table.q, payload_kg=payload, time_s=table.time_s,
+                            temp_c=table.temp_c)
+    return MeasuredPoints(np.asarray(table.q, dtype=float), np.asarray(table.xyz, dtype=float),
+                          ctx, np.asarray(setup.smr_offset_mm, dtype=float))
+
+
+def noise_sigma_mm(statistics: dict[str, Any], setup: Setup) -> tuple[float, str]:
+    """Per-axis measurement noise σ (mm) and where it came from.
+
+    Best: the scatter the sweep analysis found (tracker noise and joint
+    repeatability together, on the same tracker); else the setup's stated
+    tracker σ; else a default.
+    """
+    sweep = statistics.get("sweep_analysis") if isinstance(statistics, dict) else None
+    if isinstance(sweep, dict):
+        value = sweep.get("noise_sigma_mm")
+        if isinstance(value, (int, float)) and np.isfinite(value) and value > 0:
+            return float(value), "scatter of the sweep measurements"
+    if setup.tracker_sigma_mm:
+        return float(setup.tracker_sigma_mm), "tracker σ stated in the setup"
+    return DEFAULT_SIGMA_MM, "default (no σ stated)"

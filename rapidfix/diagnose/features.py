@@ -1,0 +1,67 @@
+"""The feature that exposes each effect, and residual components along a correction.
+
+For the report: each accepted effect is shown as the residual it explains
+against the quantity that drives it — payload for compliance, the motion
+direction for backlash, temperature or time for thermal drift, the source
+joint's angle for coupling, the joint-6 angle for a tool offset (the error
+turns with the flange), the distance from the points' centre for a scale error,
+the joint-2 angle for link geometry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rapidfix.errors.candidates.backlash import last_motion_direction
+from rapidfix.errors.effect import Effect
+from rapidfix.errors.fit_effects import MeasuredPoints
+
+
+@dataclass(frozen=True)
+class Feature:
+    """Values (N,) of the exposing quantity, its label and whether it is discrete (±1)."""
+
+    values: np.ndarray
+    label: str
+    discrete: bool = False
+
+
+def exposing_feature(effect: Effect, data: MeasuredPoints) -> Feature:
+    """The quantity that drives `effect` on these points (see the module docstring)."""
+    kind = effect.type_name
+    q = data.q
+    ctx = data.ctx
+    if kind == "joint_compliance":
+        payload = ctx.payload_kg
+        if payload is not None and np.ptp(payload) > 0:
+            return Feature(np.asarray(payload, dtype=float), "payload (kg)")
+        return Feature(np.degrees(q[:, 1] + q[:, 2]), "θ2 + θ3, upper-arm angle (°)")
+    if kind == "backlash":
+        play = np.abs(effect.params())
+        j = int(np.argmax(play))
+        direction = last_motion_direction(q, ctx.q_prev)[:, j]
+        return Feature(direction, f"direction joint {j + 1} last moved (−1 / +1)", True)
+    if kind == "thermal_drift":
+        variable = getattr(effect, "variable", "temp_c")
+        values = getattr(ctx, variable)
+        label = "temperature (°C)" if variable == "temp_c" else "time (s)"
+        return Feature(np.asarray(values, dtype=float), label)
+    if kind == "joint_coupling":
+        src = int(getattr(effect, "source", 0))
+        return Feature(np.degrees(q[:, src]), f"joint {src + 1} angle (°)")
+    if kind == "tool_offset":
+        return Feature(np.degrees(q[:, 5]), "joint 6 angle (°)")
+    if kind == "registration":
+        centre = data.xyz.mean(axis=0)
+        return Feature(np.linalg.norm(data.xyz - centre, axis=1),
+                       "distance from the points' centre (mm)")
+    return Feature(np.degrees(q[:, 1]), "joint 2 angle (°)")
+
+
+def along(vectors: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Component (N,) of `vectors` along the unit vectors of `directions` (0 where none)."""
+    norm = np.linalg.norm(directions, axis=1)
+    unit = np.where(norm[:, None] > 0, directions / np.where(norm > 0, norm, 1.0)[:, None], 0.0)
+    return np.einsum("ni,ni->n", vectors, unit)

@@ -1,0 +1,150 @@
+"""The diagnosis end to end: files in, extended model and report out.
+
+`diagnose` works on objects (a model, the robot, the setup, two point tables) and
+returns a `Diagnosis`; `diagnose_files` reads the files, runs it, saves the
+extended model (`rapidfix.errors.model_file`) and writes the HTML + JSON report.
+The calibration points are the only ones fitted; the validation points only
+ever judge.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rapidfix.diagnose.candidates import CANDIDATES
+from rapidfix.diagnose.data import measured_points, noise_sigma_mm
+from rapidfix.diagnose.report import build_report, statement, trial_record
+from rapidfix.diagnose.selection import Selection, select
+from rapidfix.errors.fit_effects import MeasuredPoints
+from rapidfix.errors.model import ErrorModel
+from rapidfix.errors.model_file import file_sha256, load_model, save_model
+from rapidfix.exceptions import MeasurementError, ModelError
+from rapidfix.kinematics import RobotModel, load_robot
+from rapidfix.measure.files import PointTable, Setup, read_points, read_setup
+from rapidfix.report.document import Report, write_report
+
+#: fewest calibration points accepted (the richest candidate has ~40 parameters)
+MIN_CALIBRATION_POINTS = 20
+MIN_VALIDATION_POINTS = 5
+
+
+@dataclass
+class Diagnosis:
+    """A finished diagnosis: the selection, the model to save, its report and statement."""
+
+    selection: Selection
+    model: ErrorModel
+    report: Report
+    statement: str
+    calibration: MeasuredPoints
+    validation: MeasuredPoints
+    files: dict[str, Path] = field(default_factory=dict)
+
+    @property
+    def accepted(self) -> list[str]:
+        """Names of the accepted effects, in the order they were found."""
+        return [t.kind for t in self.selection.accepted]
+
+
+def extended_model(original: ErrorModel, sel: Selection,
+                   data_files: Sequence[dict[str, str]] = ()) -> ErrorModel:
+    """The original model plus what the diagnosis accepted, refitted (a new object).
+
+    With nothing accepted the effects are the original ones. The tracker frame
+    and the re-referenced joint terms come along with any accepted effect, since
+    the effect was fitted together with them.
+    """
+    model = copy.deepcopy(original)
+    if sel.accepted and sel.final is not None:
+        fitted = copy.deepcopy(sel.final.model)
+        model.effects = model.effects + fitted.effects[len(original.effects):]
+    model.data_files = list(original.data_files) + list(data_files)
+    final = sel.final or sel.before
+    model.statistics = dict(original.statistics)
+    model.statistics["diagnosis"] = {
+        "accepted": [t.kind for t in sel.accepted],
+        "statement": statement(sel),
+        "validation_before": sel.before.validation.stats(),
+        "validation_after": final.validation.stats(),
+        "noise_floor_mean_mm": sel.floor_mm,
+        "candidates": [trial_record(t) for t in sel.trials],
+    }
+    return model
+
+
+def _check_sizes(table: PointTable, minimum: int, role: str) -> None:
+    if len(table) < minimum:
+        raise MeasurementError(f"{len(table)} {role} points are too few; at least {minimum} "
+                               "are needed", file=table.path)
+
+
+def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: PointTable,
+             validation: PointTable, *, candidates: Sequence[str] = CANDIDATES,
+             data_files: Sequence[dict[str, str]] = (),
+             progress: Callable[[str], None] | None = None,
+             title: str = "rapidfix diagnosis") -> Diagnosis:
+    """Find, fit and judge the missing effects; returns the extended model and report."""
+    model.check_robot(robot.name)
+    unknown = [c for c in candidates if c not in CANDIDATES]
+    if unknown:
+        raise ModelError(f"unknown candidate effect(s) {', '.join(unknown)}",
+                         hint=f"known: {', '.join(CANDIDATES)}")
+    _check_sizes(calibration, MIN_CALIBRATION_POINTS, "calibration")
+    _check_sizes(validation, MIN_VALIDATION_POINTS, "validation")
+    cal = measured_points(calibration, setup)
+    val = measured_points(validation, setup)
+    sigma, source = noise_sigma_mm(model.statistics, setup)
+    sel = select(model, robot, cal, val, default_payload_kg=setup.payload_kg,
+                 noise_sigma_mm=sigma, candidates=candidates, progress=progress)
+    extended = extended_model(model, sel, data_files)
+    report = build_report(sel, robot, cal, val, noise_source=source, title=title,
+                          notes=[f"Fitted on {len(cal)} calibration points only; the "
+                                 f"{len(val)} validation points are only predicted."])
+    return Diagnosis(sel, extended, report, statement(sel), cal, val)
+
+
+def diagnose_files(model_path: str | Path, setup_path: str | Path,
+                   calibration_path: str | Path, validation_path: str | Path,
+                   out_dir: str | Path, *, model_name: str = "model.json",
+                   robot: str | None = None,
+                   candidates: Sequence[str] = CANDIDATES,
+                   progress: Callable[[str], None] | None = None) -> Diagnosis:
+    """Read the files, diagnose, write OUT/model.json and OUT/diagnosis.{html,json}."""
+    setup = read_setup(setup_path)
+    robot_model = load_robot(robot or setup.robot)
+    model = load_model(model_path, robot_model.name)
+    calibration = read_points(calibration_path)
+    validation = read_points(validation_path)
+    files = [{"name": Path(calibration_path).name, "sha256": file_sha256(calibration_path),
+              "role": "calibration"},
+             {"name": Path(validation_path).name, "sha256": file_sha256(validation_path),
+              "role": "validation (scoring only, never fitted)"}]
+    result = diagnose(model, robot_model, setup, calibration, validation,
+                      candidates=candidates, data_files=files, progress=progress)
+    out = Path(out_dir)
+    result.files["model"] = save_model(result.model, out / model_name)
+    html_path, json_path = write_report(result.report, out, stem="diagnosis")
+    result.files["report"] = html_path
+    result.files["report_data"] = json_path
+    return result
+
+
+def summary_lines(result: Diagnosis) -> list[str]:
+    """What the command prints: the statement, one line per candidate, the headline."""
+    sel = result.selection
+    lines = [result.statement, ""]
+    lines.append(f"{'round':<6}{'candidate':<18}{'+params':>8}{'BIC gain':>10}{'z':>7}"
+                 f"{'expl.':>7}  verdict")
+    for t in sel.trials:
+        if t.stage is None:
+            lines.append(f"{t.round:<6}{t.kind:<18}{'':>8}{'':>10}{'':>7}{'':>7}  {t.verdict}")
+            continue
+        lines.append(f"{t.round:<6}{t.kind:<18}{t.added_rank:>8}{t.delta_bic:>10.1f}"
+                     f"{t.z:>7.1f}{100 * t.explained:>6.0f}%  {t.verdict}")
+    final = sel.final or sel.before
+    lines += ["", f"validation mean error: {sel.before.validation.mean_mm:.4f} mm before, "
+              f"{final.validation.mean_mm:.4f} mm after (noise floor ≈ {sel.floor_mm:.4f} mm)"]
+    return lines

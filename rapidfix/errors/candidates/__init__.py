@@ -1,0 +1,22 @@
+"""Effects beyond the per-joint error, one physical cause per module.
+
+`rapidfix diagnose` tries each as an explanation of what the per-joint model leaves
+unexplained: `compliance` (joints 2 and 3 deflecting under gravity and payload),
+`geometry` (errors of the joint screws, identifiable part only), `tool_offset`,
+`backlash`, `thermal` (arm growth with temperature or time), `coupling` (one
+joint's error depending on another's angle), `registration` (tracker frame and
+scale) and `joint_reference` (the per-joint model's offsets and first harmonics re-referenced
+on new data).
+All are registered with `rapidfix.errors.effect` by their `type_name`.
+"""
+
+from rapidfix.errors.candidates import (  # noqa: F401  (registers every effect)
+    backlash,
+    compliance,
+    coupling,
+    geometry,
+    joint_reference,
+    registration,
+    thermal,
+    tool_offset,
+)
