@@ -373,6 +373,9 @@ def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
     x = solver.solve(x, all_rows, robust=True)
     x, keep, notes = _trim_outliers(solver, x, sweeps, prob, NOISE_FLOOR_SIGMAS * sigma,
                                     max_rounds)
+    # The robust loss only serves to find the outliers; the answer is plain least squares
+    # on the rows kept (the soft-L1 weights would bias Δθ where the residual has structure).
+    x = solver.solve(x, all_rows[keep], robust=False)
     pred, p, q_act, R_fit = solver.predict(x, all_rows)
     resid = np.linalg.norm(pred - sweeps.xyz, axis=1)
 

@@ -26,7 +26,9 @@ NAMED = {
     "joint_coupling": "joint_coupling",
     "registration_scale": "registration",
 }
-SEEDS_PER_CASE = 2
+SEEDS_PER_CASE = 3
+#: pairs: a smaller second effect can hide behind the first on some seeds (see README)
+SEEDS_PER_PAIR = 2
 #: calibration points per case: 60 by default; a kinematic calibration (16 screw-error
 #: modes on top of the 23 registration and per-joint terms) wants more
 CALIBRATION_POINTS = {"link_geometry": 80}
@@ -85,8 +87,8 @@ def test_backlash_is_named_and_most_of_its_error_removed(cell):
 def test_two_effects_together_are_both_found(cell, pair):
     second = cell.detectable_seeds(pair[1:], 6)
     seeds = [s for s in cell.detectable_seeds(pair[:1], 6) if s in second]
-    assert len(seeds) >= SEEDS_PER_CASE
-    for seed in seeds[:SEEDS_PER_CASE]:
+    assert len(seeds) >= SEEDS_PER_PAIR
+    for seed in seeds[:SEEDS_PER_PAIR]:
         data, _, result = cell.scenario(pair, seed)
         assert sorted(result.accepted) == sorted(NAMED[e] for e in pair), (seed, result.statement)
         assert _after(result) <= 1.5 * _floor(data), (seed, _after(result), _floor(data))
