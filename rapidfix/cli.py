@@ -21,15 +21,15 @@ EXIT_WARNINGS = 3
 
 # Subcommand modules under rapidfix.commands, in the order `--help` lists them.
 COMMANDS: tuple[str, ...] = (
+    "demo",
     "check",
     "targets",
-    "upload",
-    "fit",
-    "demo",
     "simulate",
+    "fit",
+    "diagnose",
     "rewrite",
     "batch",
-    "diagnose",
+    "upload",
 )
 
 
