@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from rapidfix.errors.candidates.backlash import last_motion_direction
 from rapidfix.errors.context import Context
 from rapidfix.errors.fit_effects import MeasuredPoints
 from rapidfix.measure.files import PointTable, Setup
@@ -29,6 +30,21 @@ def measured_points(table: PointTable, setup: Setup) -> MeasuredPoints:
                             temp_c=table.temp_c)
     return MeasuredPoints(np.asarray(table.q, dtype=float), np.asarray(table.xyz, dtype=float),
                           ctx, np.asarray(setup.smr_offset_mm, dtype=float))
+
+
+def with_known_history(points: MeasuredPoints) -> MeasuredPoints:
+    """The points reached after every joint has moved at least once within the set.
+
+    Before that a joint's last direction of motion is unknown, so the side of its
+    backlash is too: a first pose mispredicted by up to half the play would bend a
+    fit, and the model cannot tell. Such points (usually only the first) are left out
+    of fitting, for every candidate alike; they are still predicted and scored.
+    """
+    known = (last_motion_direction(points.q, points.ctx.q_prev) != 0).all(axis=1)
+    if known.all() or known.sum() < len(known) // 2:
+        return points
+    return MeasuredPoints(points.q[known], points.xyz[known], points.ctx.take(known),
+                          points.ball_mm)
 
 
 def noise_sigma_mm(statistics: dict[str, Any], setup: Setup) -> tuple[float, str]:

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rapidfix.diagnose.candidates import CANDIDATES
-from rapidfix.diagnose.data import measured_points, noise_sigma_mm
+from rapidfix.diagnose.data import measured_points, noise_sigma_mm, with_known_history
 from rapidfix.diagnose.report import build_report, statement, trial_record
 from rapidfix.diagnose.selection import Selection, select
 from rapidfix.errors.fit_effects import MeasuredPoints
@@ -81,6 +81,13 @@ def _check_sizes(table: PointTable, minimum: int, role: str) -> None:
                                "are needed", file=table.path)
 
 
+def _history_note(left_out: int) -> list[str]:
+    if not left_out:
+        return []
+    return [f"{left_out} calibration point(s) at the start of the set, reached before "
+            "every joint had moved, were not fitted: their motion direction is unknown."]
+
+
 def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: PointTable,
              validation: PointTable, *, candidates: Sequence[str] = CANDIDATES,
              data_files: Sequence[dict[str, str]] = (),
@@ -94,15 +101,15 @@ def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: Po
                          hint=f"known: {', '.join(CANDIDATES)}")
     _check_sizes(calibration, MIN_CALIBRATION_POINTS, "calibration")
     _check_sizes(validation, MIN_VALIDATION_POINTS, "validation")
-    cal = measured_points(calibration, setup)
+    cal = with_known_history(measured_points(calibration, setup))
     val = measured_points(validation, setup)
     sigma, source = noise_sigma_mm(model.statistics, setup)
     sel = select(model, robot, cal, val, default_payload_kg=setup.payload_kg,
                  noise_sigma_mm=sigma, candidates=candidates, progress=progress)
     extended = extended_model(model, sel, data_files)
-    report = build_report(sel, robot, cal, val, noise_source=source, title=title,
-                          notes=[f"Fitted on {len(cal)} calibration points only; the "
-                                 f"{len(val)} validation points are only predicted."])
+    notes = [f"Fitted on {len(cal)} calibration points only; the {len(val)} validation "
+             "points are only predicted.", *_history_note(len(calibration) - len(cal))]
+    report = build_report(sel, robot, cal, val, noise_source=source, title=title, notes=notes)
     return Diagnosis(sel, extended, report, statement(sel), cal, val)
 
 

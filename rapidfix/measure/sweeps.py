@@ -9,7 +9,16 @@ pose, as one least-squares problem:
               commanded value of every joint (the swept samples *and* the values the
               other joints were held at — a value shared by several sweeps is one
               unknown, since the per-joint error depends on the commanded angle only);
+              plus, per joint, its backlash play b and the offset of the rows taken
+              before the joint's first motion (whose side of the play is unknown);
     data      p_tracker,i = R · FK(θ_cmd,i + Δθ) · ball + t  for every row;
+    backlash  a joint stops b/2 short of where it was sent, against the direction it
+              last moved (from the row order: rows are in execution order, a joint
+              that did not move keeps its last direction), so a row's actual angle is
+              θ_cmd + Δθ(θ_cmd) − (b/2)·d. Δθ is the curve midway between the two
+              directions, and samples approached from either side, in any order, all
+              inform it; without backlash b fits to noise and the curves stay put
+              (a joint never reached from both sides keeps b = 0);
     gauge     the joint-1 error is zero at θ1 = 0 (a constant joint-1 error is a
               tracker turned about axis 1; `registration` holds it);
     prior     a weak pull of every Δθ towards 0 (σ = `prior_deg`) that only decides
@@ -90,7 +99,13 @@ class SweepCircle:
 
 @dataclass(frozen=True)
 class SweepAnalysis:
-    """Result of `analyse_sweeps`; `joints[j]` for j in 0..5 (see `JointSweep`)."""
+    """Result of `analyse_sweeps`; `joints[j]` for j in 0..5 (see `JointSweep`).
+
+    `joints` are the curves midway between the two approach directions; `play_rad[j]`
+    (± `play_std_rad[j]`) is joint j's backlash, the difference between approaching from
+    below and from above (an angle approached from below is reached b/2 short); 0 with
+    a NaN std for a joint none of whose angles was reached from both sides.
+    """
 
     registration: Registration
     joints: tuple[JointSweep, ...]
@@ -102,6 +117,8 @@ class SweepAnalysis:
     gauge: str = "joint-1 error is zero at theta1 = 0; a constant joint-1 error is in R"
     residuals_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     notes: tuple[str, ...] = ()
+    play_rad: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    play_std_rad: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
     def report(self) -> dict[str, Any]:
         """JSON data in degrees and mm."""
@@ -126,6 +143,8 @@ class SweepAnalysis:
             "residual_rms_mm": self.rms_mm, "noise_sigma_mm": self.sigma_mm,
             "notes": list(self.notes),
             "joints": joints,
+            "backlash_play_deg": np.degrees(self.play_rad).tolist(),
+            "backlash_play_std_deg": nan_none(np.degrees(self.play_std_rad)),
             "fixed_joint_deltas": self.fixed,
             "circles": [{"joint": c.joint + 1, "rows": [c.first_row, c.last_row],
                          "radius_mm": c.radius_mm, "axis_tilt_deg": c.axis_tilt_deg,
@@ -159,6 +178,35 @@ class _Problem:
     swept: np.ndarray  # (U,) bool: a sample of a sweep of its own joint
     column: np.ndarray  # (U,) column in the parameter vector, -1 for the pinned one
     pinned: int  # the unknown fixed at 0 by the gauge, or -1
+    direction: np.ndarray  # (N, 6) last motion per row and joint: ±1, 0 before the first
+    play_col: np.ndarray  # (6,) column of each joint's backlash play b, -1 if not seen
+    start_col: np.ndarray  # (6,) column of the offset of the rows before the first motion
+    n_cols: int  # length of the parameter vector
+
+    def extra(self, x: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Values (6,) of per-joint parameters at `cols` (0 where a column is -1)."""
+        return np.where(cols >= 0, x[np.maximum(cols, 0)], 0.0)
+
+    def joint_error(self, x: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Δθ (n, 6) of `rows` for parameters x, with ∂/∂b and ∂/∂start per joint."""
+        delta = np.zeros(len(self.theta))
+        free = self.column >= 0
+        delta[free] = x[self.column[free]]
+        d = self.direction[rows]
+        d_play = -0.5 * d
+        d_start = (d == 0).astype(float)
+        play, start = self.extra(x, self.play_col), self.extra(x, self.start_col)
+        return delta[self.uid[rows]] + d_play * play + d_start * start, d_play, d_start
+
+
+def _directions(q: np.ndarray) -> np.ndarray:
+    """Sign (N, 6) of each joint's last motion over the rows in order; 0 before its first."""
+    step = np.diff(np.round(np.degrees(q), 5), axis=0, prepend=np.round(np.degrees(q[:1]), 5))
+    sign = np.sign(step)
+    rows = np.arange(len(q))[:, None]
+    moved_at = np.maximum.accumulate(np.where(sign != 0, rows, -1), axis=0)
+    filled = np.take_along_axis(sign, np.maximum(moved_at, 0), axis=0)
+    return np.where(moved_at >= 0, filled, 0.0)
 
 
 def _index(sweeps: SweepTable) -> _Problem:
@@ -182,8 +230,23 @@ def _index(sweeps: SweepTable) -> _Problem:
     pinned = int(cand[order[0]]) if len(cand) else -1
     column = np.full(start, -1)
     free = np.arange(start) != pinned
-    column[free] = 6 + np.arange(free.sum())
-    return _Problem(uid, theta, joint, swept, column, pinned)
+    n_free = int(free.sum())
+    column[free] = 6 + np.arange(n_free)
+    # A joint's play is seen only where one commanded value is reached from both sides,
+    # the start offset only where a value is reached before and after the first motion;
+    # elsewhere they would merely alias the Δθ unknowns, and stay 0.
+    direction = _directions(sweeps.q)
+    seen = np.zeros((3, start), dtype=bool)  # per unknown: reached with d = -1, 0, +1
+    for k in range(6):
+        seen[direction[:, k].astype(int) + 1, uid[:, k]] = True
+    play_ok = np.bincount(joint, seen[0] & seen[2], minlength=6) > 0
+    start_ok = np.bincount(joint, seen[1] & (seen[0] | seen[2]), minlength=6) > 0
+    n = 6 + n_free
+    play_col = np.where(play_ok, n + np.cumsum(play_ok) - 1, -1)
+    n += int(play_ok.sum())
+    start_col = np.where(start_ok, n + np.cumsum(start_ok) - 1, -1)
+    n += int(start_ok.sum())
+    return _Problem(uid, theta, joint, swept, column, pinned, direction, play_col, start_col, n)
 
 
 def _groups(sweeps: SweepTable) -> np.ndarray:
@@ -261,7 +324,7 @@ class _Solver:
                  prob: _Problem, R0: np.ndarray, sigma: float, prior: float) -> None:
         self.q, self.xyz, self.robot, self.smr = sweeps.q, sweeps.xyz, robot, smr
         self.prob, self.R0, self.sigma, self.prior = prob, R0, sigma, prior
-        self.n_free = int((prob.column >= 0).sum())
+        self.n_free = prob.n_cols - 6
 
     def unpack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         R = Rotation.from_rotvec(x[:3]).as_matrix() @ self.R0
@@ -271,8 +334,8 @@ class _Solver:
         return R, x[3:6], delta
 
     def predict(self, x: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
-        R, t, delta = self.unpack(x)
-        q_act = self.q[rows] + delta[self.prob.uid[rows]]
+        R, t, _ = self.unpack(x)
+        q_act = self.q[rows] + self.prob.joint_error(x, rows)[0]
         p = _ball(self.robot, q_act, self.smr)
         return p @ R.T + t, p, q_act, R
 
@@ -286,15 +349,21 @@ class _Solver:
         n = len(rows)
         dirs, points = self.robot.joint_frames(q_act)
         dp = np.cross(dirs, p[:, None, :] - points)  # (n, 6, 3) dp/dθ_k, robot frame
-        block = np.empty((n, 3, 12))
+        _, d_play, d_start = self.prob.joint_error(x, rows)
+        dq = np.einsum("ij,nkj->nik", R, dp)  # (n, 3, 6) tracker motion per joint
+        block = np.empty((n, 3, 24))
         block[:, :, :3] = -_skew(pred - x[3:6])
         block[:, :, 3:6] = np.eye(3)
-        block[:, :, 6:] = np.einsum("ij,nkj->nik", R, dp)
-        cols = np.empty((n, 3, 12), dtype=int)
+        block[:, :, 6:12] = dq
+        block[:, :, 12:18] = dq * d_play[:, None, :]
+        block[:, :, 18:] = dq * d_start[:, None, :]
+        cols = np.empty((n, 3, 24), dtype=int)
         cols[:, :, :6] = np.arange(6)
-        cols[:, :, 6:] = self.prob.column[self.prob.uid[rows]][:, None, :]
+        cols[:, :, 6:12] = self.prob.column[self.prob.uid[rows]][:, None, :]
+        cols[:, :, 12:18] = self.prob.play_col
+        cols[:, :, 18:] = self.prob.start_col
         rr = np.broadcast_to(np.arange(3 * n).reshape(n, 3, 1), cols.shape)
-        ok = cols >= 0
+        ok = (cols >= 0) & (block != 0.0)
         m = 6 + self.n_free
         data = sp.csr_matrix((block[ok] / self.sigma, (rr[ok], cols[ok])), shape=(3 * n, m))
         prior = sp.csr_matrix((np.full(self.n_free, 1.0 / self.prior),
@@ -383,7 +452,10 @@ def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
     R, t, delta = _apply_gauge(R_fit, t, delta, prob, robot)
     reg = Registration(R=R, t=t, rms_mm=float(np.sqrt(np.mean(resid[keep] ** 2))),
                        outlier_rows=sweeps.rows[~keep], residuals_mm=resid, inliers=keep)
-    std = _standard_errors(solver, x, all_rows[keep], prob)
+    std, cov_diag = _standard_errors(solver, x, all_rows[keep], prob)
+    play = prob.extra(x, prob.play_col)
+    play_std = np.where(prob.play_col >= 0, np.sqrt(prob.extra(cov_diag, prob.play_col)),
+                        np.nan)
     joints = _per_joint(sweeps, prob, delta, std, pred, p, q_act, R_fit, keep, robot)
     fixed = [{"joint": int(prob.joint[u]) + 1, "theta_cmd_deg": float(np.degrees(prob.theta[u])),
               "delta_deg": float(np.degrees(delta[u])), "delta_std_deg": float(np.degrees(std[u]))}
@@ -393,7 +465,7 @@ def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
     return SweepAnalysis(registration=reg, joints=joints, fixed=fixed,
                          circles=_circles(sweeps, gid, keep, robot, reg), sigma_mm=sigma_hat,
                          rms_mm=reg.rms_mm, robot=robot.name, residuals_mm=resid,
-                         notes=tuple(notes))
+                         notes=tuple(notes), play_rad=play, play_std_rad=play_std)
 
 
 def _swept_motion(robot: RobotModel, sweeps: SweepTable, q_act: np.ndarray, p: np.ndarray,
@@ -475,18 +547,18 @@ def _apply_gauge(R: np.ndarray, t: np.ndarray, delta: np.ndarray, prob: _Problem
 
 
 def _standard_errors(solver: _Solver, x: np.ndarray, rows: np.ndarray,
-                     prob: _Problem) -> np.ndarray:
-    """Standard error of every Δθ unknown (rad) from the Gauss–Newton covariance."""
+                     prob: _Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Standard error of every Δθ unknown (rad), and the covariance diagonal of x."""
     J = solver.jacobian(x, rows)
     r = solver.residuals(x, rows)
     dof = max(J.shape[0] - J.shape[1], 1)
     scale = float(r @ r) / dof
     JtJ = (J.T @ J).toarray()
-    cov_diag = np.diag(np.linalg.inv(JtJ)) * scale  # the prior keeps JtJ positive definite
+    cov_diag = np.maximum(np.diag(np.linalg.inv(JtJ)) * scale, 0.0)  # prior: JtJ is p.d.
     std = np.zeros(len(prob.theta))
     free = prob.column >= 0
-    std[free] = np.sqrt(np.maximum(cov_diag[prob.column[free]], 0.0))
-    return std
+    std[free] = np.sqrt(cov_diag[prob.column[free]])
+    return std, cov_diag
 
 
 def _per_joint(sweeps: SweepTable, prob: _Problem, delta: np.ndarray, std: np.ndarray,

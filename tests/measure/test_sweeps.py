@@ -166,3 +166,43 @@ def test_written_set_round_trip_names_the_outlier_rows(tmp_path):
     measured = clean[np.array(rows) - 2, 8:11]  # file row r is line r (header = row 1)
     assert np.allclose(measured, sweeps.xyz[np.isin(sweeps.rows, rows)])
     assert np.allclose(truth["gauge"]["R"], an.registration.R, atol=2e-5)
+
+
+def _shuffled_within_runs(table, seed):
+    """The same sweeps with the samples of every run (one joint, one repeat) in random order."""
+    run = np.flatnonzero(np.diff(table.sweep_joint) | np.diff(table.repeat)) + 1
+    rng = np.random.default_rng(seed)
+    order = np.concatenate([rng.permutation(r) for r in np.split(np.arange(len(table.q)), run)])
+    return order
+
+
+@pytest.mark.parametrize("shuffle", [False, True], ids=["plan-order", "any-order"])
+def test_backlash_is_separated_from_the_joint_curves(shuffle):
+    vr = VirtualRobot.create(seed=11, effects=("backlash",))
+    p = sweep_plan(vr.robot, vr.smr_offset_mm)
+    order = _shuffled_within_runs(p, 5) if shuffle else np.arange(len(p.q))
+    q = round_joints_deg(p.q[order])
+    # executed in row order: the simulator takes each joint's direction from the rows
+    xyz = vr.measure(q, frame="tracker", noise=False)
+    table = SweepTable(p.sweep_joint[order], q, p.repeat[order], xyz, np.arange(len(q)) + 2)
+    an = analyse_sweeps(Setup(vr.robot.name, vr.smr_offset_mm, 0.0125), table, vr.robot)
+    c, _, _ = gauge_truth(vr)
+    for j, js in enumerate(an.joints):  # the curves midway between the two directions
+        err = np.degrees(js.delta - true_delta(vr, j, js.theta_cmd, c))
+        assert np.abs(err).max() < 1e-5, j
+    # the play of joints 1-3 (the others have none), from below minus from above
+    np.testing.assert_allclose(np.degrees(an.play_rad), np.degrees(vr.errors.backlash),
+                               atol=1e-5)
+    assert an.rms_mm < 1e-4
+    report = json.loads(json.dumps(an.report()))
+    assert report["backlash_play_deg"] == pytest.approx(np.degrees(an.play_rad).tolist())
+
+
+def test_without_backlash_the_play_is_noise():
+    data = simulate_set(4, n_calibration=5, n_validation=5)
+    an = analyse_sweeps(data.setup, data.sweeps, data.robot.robot)
+    seen = np.isfinite(an.play_std_rad)
+    assert seen[:3].all()
+    # within 4 of its standard errors of zero, and small against any real play (≥ 0.01°)
+    assert np.all(np.abs(an.play_rad[seen]) < 4 * an.play_std_rad[seen])
+    assert np.degrees(np.abs(an.play_rad[:3])).max() < 0.003
