@@ -85,13 +85,34 @@ class RBFNetwork:
         self.weights = _ridge_solve(self.design(x), y, self.smoothing, self.centres.shape[0])
         return self
 
+    def _scaled_offsets(self, x: np.ndarray) -> np.ndarray:
+        """(x - c) / width (M, K), the one large temporary of `value` and `derivative`."""
+        d = np.subtract.outer(x, self.centres)
+        d *= 1.0 / self.width
+        return d
+
     def value(self, x: np.ndarray) -> np.ndarray:
-        """Δθ at angles already inside the valid range."""
-        return self.design(np.ravel(x)) @ self.weights
+        """Δθ at angles already inside the valid range (`design(x) @ weights`, computed
+        in place: this runs on every target of every program)."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        k = self.centres.shape[0]
+        g = self._scaled_offsets(x)
+        np.square(g, out=g)
+        g *= -0.5
+        np.exp(g, out=g)
+        return g @ self.weights[:k] + self.weights[k] + self.weights[k + 1] * self._u(x)
 
     def derivative(self, x: np.ndarray) -> np.ndarray:
-        """dΔθ/dθ at angles already inside the valid range."""
-        return self.design_derivative(np.ravel(x)) @ self.weights
+        """dΔθ/dθ at angles already inside the valid range (`design_derivative(x) @ weights`)."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        k = self.centres.shape[0]
+        d = self._scaled_offsets(x)
+        g = np.square(d)
+        g *= -0.5
+        np.exp(g, out=g)
+        g *= d
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        return -(g @ self.weights[:k]) / self.width + self.weights[k + 1] / half
 
     def to_dict(self) -> dict[str, Any]:
         """JSON data (weights are the effect's parameters and stored there)."""

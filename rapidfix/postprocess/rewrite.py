@@ -7,9 +7,12 @@ Steps, each vectorised over all targets of the file:
 4. for linear and circular moves that become MoveAbsJ, intermediate points
    until the joint-interpolated path stays within the tolerance (`path`);
 5. span edits: CONST jointtargets and MoveAbsJ (or filtered robtargets), a
-   header comment; every other byte stays as it was;
-6. parse the output again and push what it commands through the model
-   (`verify`): the predicted worst-case TCP deviation.
+   header comment; every other byte stays as it was. Each edit replaces or
+   inserts whole statements and declarations, which are also collected as
+   `CheckUnits`;
+6. parse the output again — its new units, which is the same check as
+   parsing all of it (`check_units`) — and push what it commands through the
+   model (`verify`): the predicted worst-case TCP deviation.
 
 A MoveL or MoveC whose start is not known before run time (the first move of
 a routine, a loop body or an IF branch) keeps its instruction and gets a
@@ -29,7 +32,9 @@ from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.errors.context import Context
 from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
+from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
+from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
 from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
@@ -38,7 +43,7 @@ from rapidfix.postprocess.path import Curves, Refinement, refine
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
 from rapidfix.postprocess.resolve import Declarations, Site, operand_label, resolve
-from rapidfix.postprocess.verify import Expected, predicted_deviation, reparse
+from rapidfix.postprocess.verify import Expected, parse_units, predicted_deviation
 from rapidfix.rapid import MotionInstruction, Program, parse_program
 from rapidfix.rapid.edit import Editor
 from rapidfix.rapid.format import format_declaration
@@ -197,6 +202,11 @@ class _Rewriter:
         self.inserted: set[str] = set()
         self.refinement: Refinement | None = None
         self.refined_sites: list[int] = []
+        self.units = CheckUnits()
+        # what verification reads back: (statement id, target slot, target row) ...
+        self.checks: list[tuple[int, int, int]] = []
+        # ... and intermediate points: (statement id, refined segment, its index there)
+        self.inter_checks: list[tuple[int, int, int]] = []
 
     # ------------------------------------------------------------------ plan
     def plan(self) -> None:
@@ -296,51 +306,60 @@ class _Rewriter:
             anchor: Any = ("after", id(decl))
             local = decl.local
             target: Any = decl
+            where = (decl.module, decl.routine)
         else:
             anchor = ("module", motion.module.lower())
             local = False
             target = next(m for m in self.program.modules if m.name == motion.module)
+            where = (motion.module, None)
         if anchor not in self.decl_blocks:
             self.decl_blocks[anchor] = []
             self.decl_anchor_order.append((anchor, target))
         prefix = "LOCAL " if local and not text.startswith("LOCAL") else ""
         self.decl_blocks[anchor].append(prefix + text)
+        self.units.add_declaration(*where, prefix + text)
 
-    def emit(self) -> tuple[Expected, int]:
-        """All span edits; returns what verification must find and the output's move count."""
+    def _replace_statement(self, site: Site, edits: list[tuple]) -> int:
+        """Apply local edits to a motion instruction as one whole-statement edit; returns
+        the id of its new text among the check units."""
+        motion = site.motion
+        text = _statement_variant(self.program, motion, edits)
+        if edits:
+            self.editor.replace(motion.span, text)
+        return self.units.add_statement(motion.module, motion.routine, text)
+
+    def _intermediates(self) -> dict[int, tuple[int, int]]:
+        """Refined site -> (first, end) index of its intermediate points in the refinement."""
+        inter: dict[int, tuple[int, int]] = {}
+        if self.refinement is not None and self.refinement.seg.size:
+            bounds = np.searchsorted(self.refinement.seg,
+                                     np.arange(len(self.refined_sites) + 1))
+            for k, site_index in enumerate(self.refined_sites):
+                lo, hi = int(bounds[k]), int(bounds[k + 1])
+                if hi > lo and self.mode.get(site_index) == "joint":
+                    inter[site_index] = (lo, hi)
+        return inter
+
+    def emit(self) -> Expected:
+        """All edits (whole statements and declarations); returns what verification must find."""
         t, p = self.targets, self.plan_
         joint_sites = [i for i in sorted(self.mode) if self.mode[i] == "joint"]
         filtered_sites = [i for i in sorted(self.mode) if self.mode[i] == "filtered"]
-        # intermediate points per refined site
-        inter: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # q_cmd, intended TCP
-        if self.refinement is not None and self.refinement.seg.size:
-            r = self.refinement
-            bounds = np.searchsorted(r.seg, np.arange(len(self.refined_sites) + 1))
-            for k, site_index in enumerate(self.refined_sites):
-                lo, hi = bounds[k], bounds[k + 1]
-                if hi > lo and self.mode.get(site_index) == "joint":
-                    inter[site_index] = (r.q_cmd[lo:hi], r.pose[lo:hi])
+        inter = self._intermediates()
+        segment_of = {site: k for k, site in enumerate(self.refined_sites)}
         # joint literals for all destinations and intermediate points at once
         dest_rows = np.array([self.sites[i].rows[-1] for i in joint_sites], dtype=int)
-        inter_rows = [(i, j) for i in joint_sites if i in inter for j in range(len(inter[i][0]))]
-        q_all = np.concatenate(
-            [p.q_cmd[dest_rows]] + [inter[i][0] for i in joint_sites if i in inter]
-        ) if joint_sites else np.zeros((0, 6))
-        ext_all = np.concatenate(
-            [t.extax[dest_rows]]
-            + [np.repeat(t.extax[self.sites[i].rows[-1]][None], len(inter[i][0]), 0)
-               for i in joint_sites if i in inter]
-        ) if joint_sites else np.zeros((0, 6))
-        literals = jointtarget_literals(np.degrees(q_all), ext_all)
-        dest_literal = dict(zip(joint_sites, literals[: len(joint_sites)]))
-        inter_literal = dict(zip(inter_rows, literals[len(joint_sites):]))
-        # filtered robtargets
-        f_rows = [r for i in filtered_sites for r in self.sites[i].rows]
-        f_tcp = t.placement.take(np.array(f_rows, dtype=int)).tcp(
-            self.robot.fk(p.q_cmd[f_rows])) if f_rows else np.zeros((0, 4, 4))
-        f_conf = self.robot.confdata(p.q_cmd[f_rows]) if f_rows else np.zeros((0, 4), int)
-        f_literal = dict(zip(f_rows, robtarget_literals(f_tcp, f_conf, t.extax[f_rows])))
-        self._filtered_declarations(filtered_sites, f_literal)
+        inter_sites = [i for i in joint_sites if i in inter]
+        r = self.refinement
+        q_parts = [p.q_cmd[dest_rows]] + [r.q_cmd[slice(*inter[i])] for i in inter_sites]
+        ext_parts = [t.extax[dest_rows]] + [
+            np.repeat(t.extax[self.sites[i].rows[-1]][None], inter[i][1] - inter[i][0], 0)
+            for i in inter_sites]
+        literals = jointtarget_literals(np.degrees(np.concatenate(q_parts)),
+                                        np.concatenate(ext_parts))
+        dest_literal = literals[: len(joint_sites)]
+        inter_start = len(joint_sites)
+        self._filtered(filtered_sites)
 
         jt_names: dict[tuple[str, str], str] = {}
 
@@ -353,17 +372,13 @@ class _Rewriter:
                                       format_declaration("CONST", "jointtarget", name, literal))
             return name
 
-        # output motion index of every input motion (intermediates come just before it)
-        added_before: dict[int, int] = {}
-        for i in joint_sites:
+        for i, literal in zip(joint_sites, dest_literal):
             site = self.sites[i]
             motion = site.motion
             stem = _stem(site, len(site.targets) - 1)
-            name = jointtarget_name(stem, dest_literal[i], site)
-            edits = _joint_edits(site, name)
-            for start, end, text in edits:
-                self.editor.replace((start, end), text)
+            name = jointtarget_name(stem, literal, site)
             if i in inter:
+                lo, hi = inter[i]
                 indent = _indent_before(self.program, motion.span.start)
                 sep = "\n" + indent if indent is not None else " "
                 drops = [(op.span.start, op.span.end, "") for key, op in motion.optional.items()
@@ -372,49 +387,62 @@ class _Rewriter:
                 zone_edit = ([(zone.value_span.start, zone.value_span.end, INTERMEDIATE_ZONE)]
                              if zone is not None and zone.value_span is not None else [])
                 lines = []
-                for j in range(len(inter[i][0])):
-                    sub = jointtarget_name(f"{stem}_{j + 1}", inter_literal[(i, j)], site)
+                for j in range(hi - lo):
+                    sub = jointtarget_name(f"{stem}_{j + 1}", literals[inter_start + j], site)
                     self.inserted.add(sub)
                     variant = _statement_variant(
                         self.program, motion, _joint_edits(site, sub) + drops + zone_edit)
                     lines.append(variant + sep)
+                    ident = self.units.add_statement(motion.module, motion.routine, variant)
+                    self.inter_checks.append((ident, segment_of[i], lo + j))
+                inter_start += hi - lo
                 self.editor.insert(motion.span.start, "".join(lines))
-                added_before[id(motion.syntax)] = len(inter[i][0])
+            ident = self._replace_statement(site, _joint_edits(site, name))
+            self.checks.append((ident, 0, site.rows[-1]))
         self._flush_declarations()
-        return self._expected(joint_sites, filtered_sites, inter, added_before)
+        return self._expected()
 
-    def _filtered_declarations(self, filtered_sites: list[int], f_literal: dict[int, str]) -> None:
+    def _filtered(self, filtered_sites: list[int]) -> None:
         """Filtered robtargets: in the declaration when only compensated moves use it,
         inline in place of an aggregate, else as a new CONST robtarget."""
         if not filtered_sites:
             return
-        t = self.targets
+        t, p = self.targets, self.plan_
+        rows_all = [r for i in filtered_sites for r in self.sites[i].rows]
+        rows_a = np.array(rows_all, dtype=int)
+        tcp = t.placement.take(rows_a).tcp(self.robot.fk(p.q_cmd[rows_a]))
+        conf = self.robot.confdata(p.q_cmd[rows_a])
+        f_literal = dict(zip(rows_all, robtarget_literals(tcp, conf, t.extax[rows_a])))
         by_decl: dict[int, list[int]] = {}
-        for i in filtered_sites:
-            for row in self.sites[i].rows:
-                op = t.operand[row]
-                if op.form == "name" and op.declaration is not None:
-                    by_decl.setdefault(id(op.declaration), []).append(row)
+        for row in rows_all:
+            op = t.operand[row]
+            if op.form == "name" and op.declaration is not None:
+                by_decl.setdefault(id(op.declaration), []).append(row)
         uses = _identifier_counts(self.program.text)
-        replace_decl: dict[int, str] = {}
+        replaced: set[int] = set()
         for rows in by_decl.values():
             decl = t.operand[rows[0]].declaration
             literals = {f_literal[r] for r in rows}
             only_here = uses.get(decl.key, 0) == 1 + len(rows)
             if len(literals) == 1 and only_here and decl.value_span is not None:
-                replace_decl[id(decl)] = literals.pop()
-                self.editor.replace(decl.value_span, replace_decl[id(decl)])
+                replaced.add(id(decl))
+                text = self.program.text
+                new = (text[decl.span.start:decl.value_span.start] + literals.pop()
+                       + text[decl.value_span.end:decl.span.end])
+                self.editor.replace(decl.span, new)
+                self.units.add_declaration(decl.module, decl.routine, new)
         names: dict[tuple[str, str], str] = {}
         for i in filtered_sites:
             site = self.sites[i]
+            edits: list[tuple] = []
             for slot, row in enumerate(site.rows):
                 op = t.operand[row]
                 literal = f_literal[row]
                 if op.form == "name" and op.declaration is not None \
-                        and id(op.declaration) in replace_decl:
+                        and id(op.declaration) in replaced:
                     continue
                 if op.form == "inline":
-                    self.editor.replace(op.value_span, literal)
+                    edits.append((op.value_span.start, op.value_span.end, literal))
                     continue
                 key = (_stem(site, slot).lower(), literal)
                 name = names.get(key)
@@ -422,7 +450,9 @@ class _Rewriter:
                     name = names[key] = self.names.allocate(_stem(site, slot), "ft_")
                     self._add_declaration(site, slot, format_declaration(
                         "CONST", "robtarget", name, literal))
-                self.editor.replace(op.value_span, name)
+                edits.append((op.value_span.start, op.value_span.end, name))
+            ident = self._replace_statement(site, edits)
+            self.checks.extend((ident, slot, row) for slot, row in enumerate(site.rows))
 
     def _flush_declarations(self) -> None:
         for anchor, target in self.decl_anchor_order:
@@ -432,54 +462,24 @@ class _Rewriter:
             else:
                 self.editor.insert_declaration(target, text)
 
-    def _expected(self, joint_sites: list[int], filtered_sites: list[int],
-                  inter: dict[int, tuple], added_before: dict[int, int]) -> tuple[Expected, int]:
-        """Where each compensated pose sits in the output, and its intended TCP."""
-        out_index: dict[int, int] = {}
-        offset = 0
-        for n, motion in enumerate(self.program.motions):
-            offset += added_before.get(id(motion.syntax), 0)
-            out_index[id(motion.syntax)] = n + offset
+    def _expected(self) -> Expected:
+        """Each compensated pose: the check statement and slot it is read from, its
+        intended TCP, frames and payload."""
         t = self.targets
-        motion_idx, slots, rows = [], [], []
-        for i in sorted(joint_sites + filtered_sites):
-            site = self.sites[i]
-            m = out_index[id(site.motion.syntax)]
-            if self.mode[i] == "joint":
-                motion_idx.append(m)
-                slots.append(0)
-                rows.append(site.rows[-1])
-            else:
-                for slot, row in enumerate(site.rows):
-                    motion_idx.append(m)
-                    slots.append(slot)
-                    rows.append(row)
-        rows_a = np.array(rows, dtype=int)
-        tcp = [t.pose[rows_a]]
-        placement = t.placement.take(rows_a)
-        payload = [t.payload_kg[rows_a]]
-        frames_parts = [placement]
-        segment_of = {site: k for k, site in enumerate(self.refined_sites)}
-        for i in joint_sites:
-            if i not in inter:
-                continue
-            poses = inter[i][1]
-            m = out_index[id(self.sites[i].motion.syntax)]
-            count = len(poses)
-            motion_idx.extend(range(m - count, m))
-            slots.extend([0] * count)
-            tcp.append(poses)
-            k = segment_of[i]
-            frames_parts.append(self.seg_frames.take(np.full(count, k)))
-            payload.append(np.full(count, self.seg_payload[k]))
-        placement_all = Placement(
-            np.concatenate([f.tool for f in frames_parts]),
-            np.concatenate([f.wobj for f in frames_parts]),
-            np.concatenate([f.stationary for f in frames_parts]),
-        )
-        expected = Expected(np.array(motion_idx, dtype=int), np.array(slots, dtype=int),
-                            np.concatenate(tcp), placement_all, np.concatenate(payload))
-        return expected, len(self.program.motions) + sum(added_before.values())
+        ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
+        placement = t.placement.take(rows)
+        tcp, payload = t.pose[rows], t.payload_kg[rows]
+        if self.inter_checks:
+            inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
+            frames = self.seg_frames.take(seg)
+            placement = Placement(*(np.concatenate([a, b]) for a, b in (
+                (placement.tool, frames.tool), (placement.wobj, frames.wobj),
+                (placement.stationary, frames.stationary))))
+            ids = np.concatenate([ids, inter_ids])
+            slots = np.concatenate([slots, np.zeros(len(seg), int)])
+            tcp = np.concatenate([tcp, self.refinement.pose[index]])
+            payload = np.concatenate([payload, self.seg_payload[seg]])
+        return Expected(ids, slots, tcp, placement, payload)
 
 
 def _module_indent(program: Program) -> str:
@@ -513,6 +513,12 @@ def rewrite_source(
     data: bytes, filename: str, comp: Compensator, options: RewriteOptions
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done."""
+    with cyclic_gc_paused():
+        return _rewrite(data, filename, comp, options)
+
+
+def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOptions
+             ) -> RewriteResult:
     program = parse_program(data, filename)
     old = read_header(program.text)
     if old is not None and not options.force:
@@ -524,7 +530,7 @@ def rewrite_source(
     job = _Rewriter(program, comp, options)
     job.plan()
     job.paths()
-    expected, motion_count = job.emit()
+    expected = job.emit()
     for site in job.sites:
         if site.reason is not None:
             job.skipped.append(Skipped(site.where, site.label, site.reason))
@@ -552,14 +558,10 @@ def rewrite_source(
         _strip_old_header(job.editor, program.text)
     job.editor.insert(program.modules[0].header_end, header.render(
         _module_indent(program), "\n"))
+    job.units.comments.extend(header.lines())
     output = job.editor.render()
-    checked = reparse(output, filename)
-    if len(checked.motions) != motion_count:
-        raise RapidSemanticError(
-            f"the rewritten program has {len(checked.motions)} motion instructions, "
-            f"{motion_count} were expected; nothing was written",
-            file=filename, hint="please report this as a rapidfix bug")
-    deviation = predicted_deviation(comp.model, comp.robot, checked.motions, expected)
+    motions = parse_units(job.units, filename)
+    deviation = predicted_deviation(comp.model, comp.robot, motions, expected)
     worst = float(deviation.max()) if deviation.size else None
     return RewriteResult(
         filename=filename,

@@ -1,13 +1,13 @@
 """Check a rewritten program the way the controller and the robot will see it.
 
-The output is parsed again (a program that does not parse is never written).
-Its motion instructions, minus the intermediate points the rewrite inserted,
-line up one to one with the input's. For every compensated move the target
-is read back from the output text, turned into the joints the controller will
-command (a jointtarget as written, rounded to the controller's single
-precision; a filtered robtarget through the nominal inverse kinematics on its
-confdata) and pushed through the error model: the distance between the TCP the
-model predicts and the intended TCP is the predicted deviation.
+The output is parsed again — its new statements and declarations, which is the
+same check as parsing the whole of it (see `check_units`); a program that does
+not parse is never written. For every compensated move the target is read back
+from that text, turned into the joints the controller will command (a
+jointtarget as written, rounded to the controller's single precision; a
+filtered robtarget through the nominal inverse kinematics on its confdata) and
+pushed through the error model: the distance between the TCP the model predicts
+and the intended TCP is the predicted deviation.
 """
 
 from __future__ import annotations
@@ -21,18 +21,20 @@ from rapidfix.errors.context import Context
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import RapidfixError, RapidSemanticError
 from rapidfix.kinematics.frames import pose
+from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
 from rapidfix.postprocess.resolve import motion_targets
-from rapidfix.rapid import MotionInstruction, Program, parse_program
+from rapidfix.rapid import MotionInstruction
 
 
 @dataclass(frozen=True)
 class Expected:
-    """What the output must hold: per checked pose, the output motion index it is read
-    from (`motion` (K,)), the target operand of that motion (`slot` (K,), 0 CirPoint or
-    the only target, 1 ToPoint of a circular move), the intended TCP `tcp` (K,4,4) in
-    its work object, its frames and payload."""
+    """What the output must hold, per checked pose: the motion instruction it is read
+    from (`motion` (K,), an index into the list `parse_units` returns), the target
+    operand of that motion (`slot` (K,): 0 the CirPoint or the only target, 1 the
+    ToPoint of a circular move), the intended TCP `tcp` (K,4,4) in its work object,
+    its frames and payload."""
 
     motion: np.ndarray
     slot: np.ndarray
@@ -41,11 +43,14 @@ class Expected:
     payload_kg: np.ndarray
 
 
-def reparse(data: bytes, filename: str) -> Program:
-    """Parse the rewritten bytes; an error here is a bug, never written to disk."""
+def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
+    """Parse the rewritten parts; their motion instructions by statement id.
+
+    An error here is a bug of the rewrite: it is reported and nothing is written.
+    """
     try:
-        return parse_program(data, filename)
-    except RapidfixError as err:
+        return units.parse(filename)[1]
+    except (RapidfixError, ValueError) as err:
         raise RapidSemanticError(
             f"the rewritten program does not parse ({err}); nothing was written",
             file=filename,

@@ -68,6 +68,15 @@ def test_derivative_matches_finite_difference(theta_deg):
     assert net.derivative(x) == pytest.approx(fd, rel=1e-5, abs=1e-9)
 
 
+def test_value_and_derivative_are_the_fitted_basis_times_the_weights():
+    # the fit uses the basis matrices, evaluation computes the same sums in place
+    net = _wavy_network()
+    x = np.linspace(X[0], X[-1], 777)
+    np.testing.assert_allclose(net.value(x), net.design(x) @ net.weights, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(net.derivative(x), net.design_derivative(x) @ net.weights,
+                               rtol=1e-12, atol=1e-15)
+
+
 def _effect(policy="clamp"):
     nets = [None] * 6
     nets[2], _ = fit_network(X, np.radians(0.01 * np.sin(X) + 0.02))

@@ -1,0 +1,93 @@
+"""The text a rewrite changed, as whole statements and declarations, parsed on their own.
+
+The rewrite changes a program only by replacing a whole statement or declaration
+with a new one, inserting whole statements before a statement, inserting whole
+declarations among declarations, and inserting or removing comment lines; every
+other byte is the input's, which parsed. RAPID's grammar is context-free and a
+statement (`_statement`) or declaration (`data_decl`) is one of its symbols, so
+the output parses exactly when every new unit parses as a unit of its kind: the
+output's derivation is the input's with those subtrees exchanged. Parsing only
+the new units, grouped by module and routine as they stand in the output, is
+therefore the same check as parsing the whole output again, at the cost of the
+changed text only. It also gives back the values the output commands (a
+jointtarget and the MoveAbsJ that names it sit in the same check module).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rapidfix.rapid import MotionInstruction, Program, parse_program
+
+
+@dataclass
+class CheckUnits:
+    """New statements and declarations of one rewrite, by (module, routine).
+
+    `add_statement` returns the statement's id; `order()` lists the ids in the
+    order their motion instructions appear in the check program.
+    """
+
+    comments: list[str] = field(default_factory=list)
+    _decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
+    _statements: dict[tuple[str, str], list[tuple[int, str]]] = field(default_factory=dict)
+    _count: int = 0
+
+    def add_declaration(self, module: str, routine: str | None, text: str) -> None:
+        """A new or replaced declaration (`routine` None at module level)."""
+        self._decls.setdefault((module, routine), []).append(text)
+
+    def add_statement(self, module: str, routine: str, text: str) -> int:
+        """A new or replaced motion instruction; returns its id."""
+        ident = self._count
+        self._count += 1
+        self._statements.setdefault((module, routine), []).append((ident, text))
+        return ident
+
+    @property
+    def statement_count(self) -> int:
+        return self._count
+
+    def _routines(self) -> dict[str, list[str]]:
+        by_module: dict[str, list[str]] = {}
+        for module, routine in [*self._decls, *self._statements]:
+            routines = by_module.setdefault(module, [])
+            if routine is not None and routine not in routines:
+                routines.append(routine)
+        return by_module
+
+    def text(self) -> tuple[str, list[int]]:
+        """The check program and the statement ids in the order they appear in it."""
+        out: list[str] = []
+        order: list[int] = []
+        modules = self._routines() or {"RapidfixCheck": []}  # the comments alone
+        for n, (module, routines) in enumerate(modules.items()):
+            out.append(f"MODULE {module}")
+            if n == 0:
+                out.extend(self.comments)
+            out.extend(self._decls.get((module, None), []))
+            for routine in routines:
+                out.append(f"PROC {routine}()")
+                out.extend(self._decls.get((module, routine), []))
+                for ident, statement in self._statements.get((module, routine), []):
+                    out.append(statement)
+                    order.append(ident)
+                out.append("ENDPROC")
+            out.append("ENDMODULE")
+        return "\n".join(out) + "\n", order
+
+    def parse(self, filename: str) -> tuple[Program, list[MotionInstruction]]:
+        """Parse the check program; the motions (one per statement id, by id).
+
+        Raises RapidfixError (syntax) or ValueError when a statement is not exactly
+        one motion instruction.
+        """
+        text, order = self.text()
+        program = parse_program(text, f"{filename} (rewritten parts)")
+        if len(program.motions) != len(order):
+            raise ValueError(f"{len(program.motions)} motion instructions in the rewritten "
+                             f"parts, {len(order)} expected")
+        by_id: list[MotionInstruction | None] = [None] * len(order)
+        for ident, motion in zip(order, program.motions):
+            by_id[ident] = motion
+        return program, by_id  # type: ignore[return-value]
