@@ -3,9 +3,10 @@
 `run.diagnose` / `run.diagnose_files` (the `rapidfix diagnose` command) fit every
 candidate effect (`candidates`, physics in `rapidfix.errors.candidates`) on the
 calibration points with the generic fitter (`rapidfix.errors.fit_effects`),
-judge it on the validation points (`selection`: BIC, a paired significance test
-and the share of the residual above noise), add the accepted ones greedily and
-save the refitted model; `report` writes the before/after report with the
-evidence, `features`/`plots` the residual against what exposed each effect.
+judge it on the validation points (`selection`: BIC, a significance test of the
+predicted change and the share of the validation residual explained), add the
+accepted ones greedily and save the refitted model; `report` writes the
+before/after report with the evidence, `features`/`plots` the residual against
+what exposed each effect.
 `demo.demo_loop` shows the whole loop on a virtual robot with one hidden effect.
 """

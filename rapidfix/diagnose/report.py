@@ -61,6 +61,7 @@ def trial_record(trial: Trial) -> dict[str, Any]:
     record: dict[str, Any] = {
         "candidate": trial.kind, "round": trial.round, "physics": trial.physics,
         "detail": trial.detail, "variants_screened": trial.variants,
+        "tried_on_top_of": trial.after or None,
         "accepted": trial.accepted, "verdict": trial.verdict,
     }
     if trial.stage is not None:
@@ -162,7 +163,7 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
          "validation mean (mm)", "verdict"],
         rows,
         f"Accepted when the BIC gain exceeds {BIC_MARGIN:g} (after a charge for screened "
-        f"variants), the per-point validation improvement is significant (z ≥ {Z_MIN:g}) and "
+        f"variants), the validation residual follows the change it predicts (z ≥ {Z_MIN:g}) and "
         f"it explains at least {100 * SHARE_MIN:.0f} % of the mean squared validation "
         f"residual. Noise level: {sel.floor_mm:.4f} mm mean, from the {noise_source}."))
     for trial in sel.accepted:

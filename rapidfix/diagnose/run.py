@@ -142,14 +142,16 @@ def diagnose_files(model_path: str | Path, setup_path: str | Path,
 def summary_lines(result: Diagnosis) -> list[str]:
     """What the command prints: the statement, one line per candidate, the headline."""
     sel = result.selection
+    names = [f"{t.after} + {t.kind}" if t.after else t.kind for t in sel.trials]
+    w = max([18, *(len(n) + 2 for n in names)])
     lines = [result.statement, ""]
-    lines.append(f"{'round':<6}{'candidate':<18}{'+params':>8}{'BIC gain':>10}{'z':>7}"
+    lines.append(f"{'round':<6}{'candidate':<{w}}{'+params':>8}{'BIC gain':>10}{'z':>7}"
                  f"{'expl.':>7}  verdict")
-    for t in sel.trials:
+    for t, name in zip(sel.trials, names):
         if t.stage is None:
-            lines.append(f"{t.round:<6}{t.kind:<18}{'':>8}{'':>10}{'':>7}{'':>7}  {t.verdict}")
+            lines.append(f"{t.round:<6}{name:<{w}}{'':>8}{'':>10}{'':>7}{'':>7}  {t.verdict}")
             continue
-        lines.append(f"{t.round:<6}{t.kind:<18}{t.added_rank:>8}{t.delta_bic:>10.1f}"
+        lines.append(f"{t.round:<6}{name:<{w}}{t.added_rank:>8}{t.delta_bic:>10.1f}"
                      f"{t.z:>7.1f}{100 * t.explained:>6.0f}%  {t.verdict}")
     final = sel.final or sel.before
     lines += ["", f"validation mean error: {sel.before.validation.mean_mm:.4f} mm before, "

@@ -11,9 +11,13 @@ accepts the best one that passes all three tests:
    RSS and k effective parameters, BIC = n ln(RSS/n) + k ln n. The candidate must
    lower it by more than `BIC_MARGIN` (10: "very strong" evidence), after a charge
    of 2 ln(v) for having picked the best of v variants (which joint pair couples).
-2. **Prediction.** On the validation points the squared residual must fall, point
-   by point, significantly: a paired test of the per-point reductions with
-   z ≥ `Z_MIN` (3), so an improvement that noise could make is not enough.
+2. **Prediction.** On the validation points the residual must lean, significantly,
+   the way the candidate moves the predictions: a t test of the per-point products
+   of residual and predicted change with z ≥ `Z_MIN` (3), so a change that fitted
+   noise could make is not enough (`validation_z`). It is the score test of the
+   candidate on points it never saw; testing the per-point fall of the squared
+   error instead has half its signal to the same noise and misses a real second
+   effect that is small next to the noise (test 3 judges how much the error falls).
 3. **Relevance.** The reduction must be at least `SHARE_MIN` (20 %) of the mean
    squared validation residual, so a flexible effect nibbling at a cause it does
    not describe is not taken, and nothing is taken from a residual that is
@@ -23,7 +27,11 @@ accepts the best one that passes all three tests:
 
 Rounds continue until no candidate passes, so effects present together are found
 one after the other. Parameters the data cannot separate from those already in
-the model add nothing to the rank and are never accepted twice.
+the model add nothing to the rank and are never accepted twice. Because a
+flexible candidate can stand in for two simple causes at once (link geometry
+spans a tool offset and a tracker scale), a round won by one candidate looks one
+step ahead: two simpler ones that together pass and beat it by the BIC margin are
+accepted instead (`simpler_pair`).
 """
 
 from __future__ import annotations
@@ -87,6 +95,8 @@ class Trial:
     explained: float = float("nan")
     accepted: bool = False
     verdict: str = ""
+    #: for a pair look-ahead, the candidate this one was tried on top of
+    after: str = ""
 
     @property
     def effect(self) -> Effect | None:
@@ -148,8 +158,7 @@ def judge(trial: Trial, current: Stage, noise_sigma_mm: float) -> None:
     trial.added_rank = stage.fit.rank - current.fit.rank
     trial.delta_bic = (current.bic - stage.bic) - 2.0 * np.log(trial.variants)
     d = current.validation.norms**2 - stage.validation.norms**2
-    spread = float(np.std(d, ddof=1)) if d.size > 1 else 0.0
-    trial.z = float(d.mean() / (spread / np.sqrt(d.size))) if spread > 0 else 0.0
+    trial.z = validation_z(current.validation, stage.validation)
     trial.share = _share(trial, noise_sigma_mm)
     total = float(np.mean(current.validation.norms**2))
     trial.explained = float(d.mean() / total) if total > 0 else 0.0
@@ -159,11 +168,78 @@ def judge(trial: Trial, current: Stage, noise_sigma_mm: float) -> None:
     if not trial.delta_bic > BIC_MARGIN:
         problems.append(f"BIC gain {trial.delta_bic:.1f} ≤ {BIC_MARGIN:g}")
     if not trial.z >= Z_MIN:
-        problems.append(f"validation gain not significant (z = {trial.z:.1f} < {Z_MIN:g})")
+        problems.append(f"validation change not significant (z = {trial.z:.1f} < "
+                        f"{Z_MIN:g})")
     if not trial.explained >= SHARE_MIN:
         problems.append(f"explains {100 * max(trial.explained, 0):.0f} % of the validation "
                         f"residual (< {100 * SHARE_MIN:.0f} %)")
     trial.verdict = "; ".join(problems) if problems else "passes"
+
+
+def validation_z(before: Residuals, after: Residuals) -> float:
+    """z of the projection of the validation residual on the change the candidate predicts.
+
+    Per point, c = r·Δ with r the residual before and Δ = r − r' how far the candidate
+    moves the prediction. If the change is fitted noise, r (noise on points never
+    fitted) is independent of Δ and c averages zero; if the candidate describes
+    something real, r leans the way Δ points. The t statistic of c tests just that.
+    (The per-point fall of the squared error, |r|² − |r'|² = 2c − |Δ|², has the noise
+    of 2c but, for a right candidate, only half its mean: it needs four times the
+    points to see the same effect. How much the error falls is the relevance test's.)
+    """
+    r = before.vectors
+    c = np.einsum("ij,ij->i", r, r - after.vectors)
+    spread = float(np.std(c, ddof=1)) if c.size > 1 else 0.0
+    return float(c.mean() / (spread / np.sqrt(c.size))) if spread > 0 else 0.0
+
+
+def _try(kind: str, current: Stage, setting: Setting, val: MeasuredPoints,
+         noise_sigma_mm: float, round_no: int) -> Trial:
+    """Candidate `kind` added to the current stage, fitted and judged."""
+    cand: Candidate = build(kind, current.model, setting)
+    trial = Trial(cand.kind, cand.physics, round_no, cand.detail, cand.reason, cand.variants)
+    if cand.effect is None:
+        trial.verdict = f"not tried: {cand.reason}"
+        return trial
+    trial_model = copy.deepcopy(current.model)
+    trial_model.effects.append(cand.effect)
+    trial.stage = _fit(trial_model, setting.robot, setting.calibration, val)
+    trial.previous = current
+    judge(trial, current, noise_sigma_mm)
+    return trial
+
+
+def simpler_pair(best: Trial, tried: Sequence[Trial], setting: Setting, val: MeasuredPoints,
+                 noise_sigma_mm: float) -> tuple[list[Trial], list[Trial]]:
+    """Two simpler effects that together beat the round's most flexible winner, if any.
+
+    Greedy selection takes the largest BIC gain; a flexible candidate (link geometry
+    spans a tool offset and a scale) can win a round with one acceptance where two
+    simple causes are at work. So when the winner adds more parameters than a pair
+    would, each passing simpler candidate A is tried with each other candidate B on
+    top (together fewer parameters than the winner). A + B replace the winner when B
+    passes all three tests on top of A and the pair's BIC gain beats the winner's by
+    more than `BIC_MARGIN`. Returns the trials of B made on the way, and the effects
+    to accept: the pair (A, B) or the winner alone.
+    """
+    made: list[Trial] = []
+    choice: tuple[Trial, Trial] | None = None
+    gain = best.delta_bic + BIC_MARGIN
+    for first in tried:
+        if first is best or first.verdict != "passes" or first.added_rank >= best.added_rank:
+            continue
+        assert first.stage is not None
+        for other in tried:
+            if (other.stage is None or other.kind in (best.kind, first.kind)
+                    or first.added_rank + max(other.added_rank, 1) >= best.added_rank):
+                continue
+            second = _try(other.kind, first.stage, setting, val, noise_sigma_mm, best.round)
+            second.after = first.kind
+            second.detail = f"on top of {first.kind} (pair look-ahead) {second.detail}".strip()
+            made.append(second)
+            if second.verdict == "passes" and first.delta_bic + second.delta_bic > gain:
+                choice, gain = (first, second), first.delta_bic + second.delta_bic
+    return made, [best] if choice is None else list(choice)
 
 
 def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoints, *,
@@ -179,33 +255,28 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
     round_no = 0
     while remaining:
         round_no += 1
-        passing: list[Trial] = []
+        tried: list[Trial] = []
         for kind in remaining:
             if progress:
                 progress(f"round {round_no}: {kind}")
-            cand: Candidate = build(kind, current.model, setting)
-            trial = Trial(cand.kind, cand.physics, round_no, cand.detail, cand.reason,
-                          cand.variants)
-            sel.trials.append(trial)
-            if cand.effect is None:
-                trial.verdict = f"not tried: {cand.reason}"
-                continue
-            trial_model = copy.deepcopy(current.model)
-            trial_model.effects.append(cand.effect)
-            trial.stage = _fit(trial_model, robot, cal, val)
-            trial.previous = current
-            judge(trial, current, noise_sigma_mm)
-            if trial.verdict == "passes":
-                passing.append(trial)
+            tried.append(_try(kind, current, setting, val, noise_sigma_mm, round_no))
+        sel.trials.extend(tried)
+        passing = [t for t in tried if t.verdict == "passes"]
         if not passing:
             break
         best = max(passing, key=lambda t: t.delta_bic)
-        best.accepted = True
-        best.verdict = "accepted"
-        sel.accepted.append(best)
-        assert best.stage is not None
-        current = best.stage
-        remaining.remove(best.kind)
+        ahead, chosen = simpler_pair(best, tried, setting, val, noise_sigma_mm)
+        sel.trials.extend(ahead)
+        if best not in chosen:
+            best.verdict = (f"passes, but {' + '.join(t.kind for t in chosen)} gain more BIC "
+                            "with fewer parameters (pair look-ahead)")
+        for trial in chosen:
+            trial.accepted = True
+            trial.verdict = "accepted"
+            sel.accepted.append(trial)
+            assert trial.stage is not None
+            current = trial.stage
+            remaining.remove(trial.kind)
     sel.final = current if sel.accepted else before
     refine_noise(sel, current)
     return sel

@@ -36,8 +36,9 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     nominal = model.nominal
     w, r = model.axis_dirs, model.axis_points
     c0 = wrist_centre(nominal)
-    _, prefix = product_of_exponentials(w, r, model.home, safe)
-    R, t = prefix[:, 3, :3, :3], prefix[:, 3, :3, 3]  # e^{S1θ1} e^{S2θ2} e^{S3θ3}
+    # only the arm's three axes place the wrist centre
+    arm3, prefix = product_of_exponentials(w[:3], r[:3], np.eye(4), safe[:, :3])
+    R, t = arm3[:, :3, :3], arm3[:, :3, 3]  # e^{S1θ1} e^{S2θ2} e^{S3θ3}
     c = np.einsum("nij,j->ni", R, c0) + t
     # Ahead of axis 1: along the arm plane's forward direction, turned by θ1.
     fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
@@ -109,13 +110,90 @@ def select_by_conf(
     """The valid solution whose confdata is `conf` (N, 4) or (4,): (q (N, 6), status (N,)).
 
     Poses with no such solution get NaN joints and status NO_MATCHING_CONF (or the
-    pose's own status when it has no valid solution at all).
+    pose's own status when it has no valid solution at all). Of several matching
+    slots the first in slot order is taken.
+
+    Works on the compact form: the whole-turn variant of each axis is chosen per
+    branch by the quadrant (axes 1, 4, 6) and sign (axis 5) tests alone, and the
+    wrist-centre geometry is evaluated on that one joint vector per branch, never
+    on every ±360° combination.
     """
     n = len(sols)
     conf = np.asarray(conf, dtype=int)
     if conf.shape not in ((4,), (n, 4)):
         raise KinematicsError(f"confdata must have shape (4,) or ({n}, 4), got {conf.shape}")
     conf = np.broadcast_to(conf, (n, 4))
+    first, ambiguous = _turns_on_conf(sols, conf)
+    candidate = np.all(first >= 0, axis=2)
+    rows, branches = np.nonzero(candidate)
+    q_cand = sols.base_q[rows, branches] + 2.0 * np.pi * first[rows, branches]
+    match = np.zeros((n, 8), dtype=bool)
+    match[rows, branches] = conf_matches(model, q_cand, conf[rows])
+    found = match.any(axis=1)
+    chosen = np.argmax(match, axis=1)
+    q = np.full((n, 6), np.nan)
+    q[found] = sols.base_q[found, chosen[found]] + 2.0 * np.pi * first[found, chosen[found]]
+    status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
+    status[found & sols.base_singular[np.arange(n), chosen]] = IKStatus.WRIST_SINGULAR
+    any_valid = np.any(sols.reachable & np.all(sols.turn_ok != 0, axis=2), axis=1)
+    status[~any_valid] = sols.status[~any_valid]
+    # A branch whose first candidate fails the geometry test but has further
+    # candidates (an axis 2, 3 or 5 with more than one turn in range) is settled
+    # slot by slot; with the usual ranges this never happens.
+    before = np.where(found, chosen, 8)[:, None] > np.arange(8)
+    redo = np.flatnonzero(np.any(ambiguous & candidate & ~match & before, axis=1))
+    if redo.size:
+        q[redo], status[redo] = _select_expanded(model, _take(sols, redo), conf[redo])
+    return q, status
+
+
+def _turns_on_conf(sols: IKSolutions, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per branch and axis, the first whole turn (N, 8, 6) whose angle is within the limits
+    and passes the confdata's quadrant / θ5-sign test (-1: none), and (N, 8) whether
+    an axis of the branch has more than one such turn."""
+    n = len(sols)
+    base, allowed = _by_axis(sols)
+    first = np.full((6, n, 8), -1, dtype=np.int64)
+    several = np.zeros((n, 8), dtype=bool)
+    quadrant_of = {0: 0, 3: 1, 5: 2}  # axis -> confdata entry
+    wants_neg = ((conf[:, 3] & 1) != 0)[:, None]
+    with np.errstate(invalid="ignore"):
+        for j, count in enumerate(sols.counts):
+            seen = np.zeros((n, 8), dtype=bool)
+            for k in range(count):
+                angle = base[j] + 2.0 * np.pi * k
+                ok = ((allowed[j] >> k) & 1).astype(bool) & sols.reachable
+                if j in quadrant_of:
+                    want = conf[:, quadrant_of[j], None]
+                    lo = np.floor((angle - CONF_TOL) / QUADRANT)
+                    hi = np.floor((angle + CONF_TOL) / QUADRANT)
+                    ok &= (lo <= want) & (want <= hi)
+                elif j == 4:
+                    ok &= np.where(wants_neg, angle < CONF_TOL, angle > -CONF_TOL)
+                first[j] = np.where(ok & ~seen, k, first[j])
+                several |= ok & seen
+                seen |= ok
+    return np.moveaxis(first, 0, 2), several
+
+
+def _take(sols: IKSolutions, rows: np.ndarray) -> IKSolutions:
+    """The solutions of a subset of the poses."""
+    return IKSolutions(
+        base_q=sols.base_q[rows],
+        reachable=sols.reachable[rows],
+        turn_ok=sols.turn_ok[rows],
+        base_singular=sols.base_singular[rows],
+        status=sols.status[rows],
+        counts=sols.counts,
+        backend=sols.backend,
+    )
+
+
+def _select_expanded(
+    model: RobotModel, sols: IKSolutions, conf: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """`select_by_conf` slot by slot over the expanded solutions (for the rare poses
+    the compact choice cannot settle)."""
     match = sols.valid & conf_matches(model, sols.q, conf[:, None, :])
     found = match.any(axis=1)
     chosen = np.argmax(match, axis=1)
@@ -123,10 +201,69 @@ def select_by_conf(
 
 
 def select_nearest(sols: IKSolutions, q_prev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The valid solution nearest q_prev (N, 6) or (6,) in joint space (Euclidean, rad)."""
+    """The valid solution nearest q_prev (N, 6) or (6,) in joint space (Euclidean, rad).
+
+    Of equally near slots the first in slot order is taken. Works on the compact
+    form: the distance is a sum over the axes, so each branch's nearest slot takes
+    each axis's nearest whole-turn variant, and only the eight branches are compared.
+    """
     n = len(sols)
     qp, _ = as_joint_batch(q_prev)
     qp = np.broadcast_to(qp, (n, 6))
+    turns, gap = _nearest_turns(sols, qp)
+    usable = sols.reachable & np.all(turns >= 0, axis=2)
+    q8 = sols.base_q + 2.0 * np.pi * np.maximum(turns, 0)
+    with np.errstate(invalid="ignore"):
+        dist = np.sum((q8 - qp[:, None, :]) ** 2, axis=2)
+    dist = np.where(usable, dist, np.inf)
+    chosen = np.argmin(dist, axis=1)
+    found = usable.any(axis=1)
+    rows = np.arange(n)
+    q = np.where(found[:, None], q8[rows, chosen], np.nan)
+    status = np.where(found, IKStatus.OK, IKStatus.UNREACHABLE).astype(np.int8)
+    status[found & sols.base_singular[rows, chosen]] = IKStatus.WRIST_SINGULAR
+    status[~found] = sols.status[~found]
+    # Where another variant of an axis is as near to within rounding, or q_prev is not
+    # finite, the sum's rounding decides: those poses are settled slot by slot.
+    with np.errstate(invalid="ignore"):
+        close = np.any(gap[rows, chosen] <= 1e-12 * (1.0 + dist[rows, chosen])[:, None], axis=1)
+    redo = np.flatnonzero((found & close) | ~np.all(np.isfinite(qp), axis=1))
+    if redo.size:
+        q[redo], status[redo] = _nearest_expanded(_take(sols, redo), qp[redo])
+    return q, status
+
+
+def _nearest_turns(sols: IKSolutions, qp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per branch and axis, the whole turn (N, 8, 6) within the limits nearest qp (-1: none;
+    the first of equals) and how much farther the runner-up is (squared, rad²; inf: none)."""
+    n = len(sols)
+    base, allowed = _by_axis(sols)
+    best = np.full((6, n, 8), -1, dtype=np.int64)
+    best_sq = np.full((6, n, 8), np.inf)
+    second_sq = np.full((6, n, 8), np.inf)
+    with np.errstate(invalid="ignore"):
+        for j, count in enumerate(sols.counts):
+            for k in range(count):
+                d = base[j] + 2.0 * np.pi * k - qp[:, j, None]
+                sq = d * d
+                ok = ((allowed[j] >> k) & 1).astype(bool) & sols.reachable
+                nearer = ok & (sq < best_sq[j])
+                second_sq[j] = np.where(nearer, best_sq[j],
+                                        np.where(ok, np.minimum(second_sq[j], sq), second_sq[j]))
+                best[j] = np.where(nearer, k, best[j])
+                best_sq[j] = np.where(nearer, sq, best_sq[j])
+        gap = second_sq - best_sq
+    return np.moveaxis(best, 0, 2), np.moveaxis(gap, 0, 2)
+
+
+def _by_axis(sols: IKSolutions) -> tuple[np.ndarray, np.ndarray]:
+    """Branch angles and turn masks axis-major, (6, N, 8): each axis's slice contiguous."""
+    return (np.ascontiguousarray(np.moveaxis(sols.base_q, 2, 0)),
+            np.ascontiguousarray(np.moveaxis(sols.turn_ok, 2, 0)))
+
+
+def _nearest_expanded(sols: IKSolutions, qp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`select_nearest` slot by slot over the expanded solutions."""
     with np.errstate(invalid="ignore"):
         dist = np.sum((sols.q - qp[:, None, :]) ** 2, axis=2)
     dist = np.where(sols.valid, dist, np.inf)

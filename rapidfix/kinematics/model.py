@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rapidfix.exceptions import KinematicsError
-from rapidfix.kinematics.screws import product_of_exponentials, screw_rows
+from rapidfix.kinematics.screws import forward_pose, product_of_exponentials, screw_rows
 
 if TYPE_CHECKING:
     from rapidfix.kinematics.frames import Tool, WorkObject
@@ -111,7 +111,7 @@ class RobotModel:
         work-object frame instead. A (6,) input gives a (4, 4) result.
         """
         qb, single = as_joint_batch(q)
-        T, _ = product_of_exponentials(self.axis_dirs, self.axis_points, self.home, qb)
+        T = forward_pose(self.axis_dirs, self.axis_points, self.home, qb)
         if tool is not None or wobj is not None:
             from rapidfix.kinematics.frames import tcp_pose
 

@@ -18,7 +18,6 @@ from rapidfix.errors.compensate import solve_compensation
 from rapidfix.errors.context import Context
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import ModelError
-from rapidfix.kinematics.confdata import CONF_TOL, QUADRANT, conf_matches
 from rapidfix.kinematics.ik_result import IKStatus
 from rapidfix.postprocess.placement import Placement
 
@@ -46,35 +45,9 @@ class Plan:
 
 
 def ik_on_conf(robot: Any, flange: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The IK solution each confdata names: the same answer as `robot.ik_conf`, faster.
-
-    A pose has about a hundred solution slots (branches and ±360° variants); the
-    geometric part of the confdata test (`conf_matches`: wrist centre sides, θ5
-    sign) is evaluated only on the slots whose axis 1, 4 and 6 quadrants already
-    agree with cf1, cf4, cf6 — one or two per pose — instead of on all of them.
-    """
-    sols = robot.ik(flange)
-    n = len(sols)
-    conf = np.asarray(conf, dtype=int)
-    with np.errstate(invalid="ignore"):
-        angles = sols.q[:, :, [0, 3, 5]]
-        lo = np.floor((angles - CONF_TOL) / QUADRANT)
-        hi = np.floor((angles + CONF_TOL) / QUADRANT)
-        want = conf[:, None, :3]
-        candidate = sols.valid & np.all((lo <= want) & (want <= hi), axis=2)
-    rows, slots = np.nonzero(candidate)
-    match = np.zeros_like(candidate)
-    if rows.size:
-        match[rows, slots] = conf_matches(robot, sols.q[rows, slots], conf[rows])
-    found = match.any(axis=1)
-    chosen = np.argmax(match, axis=1)
-    every = np.arange(n)
-    q = np.where(found[:, None], sols.q[every, chosen], np.nan)
-    status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
-    status[found & sols.singular[every, chosen]] = IKStatus.WRIST_SINGULAR
-    unsolved = ~sols.valid.any(axis=1)
-    status[unsolved] = sols.status[unsolved]
-    return q, status
+    """The IK solution each confdata names (q (N,6) rad, status (N,)): `robot.ik_conf`,
+    which chooses on the compact IK result without expanding every ±360° variant."""
+    return robot.ik_conf(flange, np.asarray(conf, dtype=int))
 
 
 def compensation_tool(placement: Placement) -> np.ndarray:

@@ -142,11 +142,18 @@ class _FrameCache:
         self.known: dict[tuple, tuple[Any, str]] = {}
 
     def get(self, operand: Operand, type_name: str) -> tuple[Any, str]:
-        key = (type_name, operand.text.lower(), id(operand.declaration), operand.static)
+        key = (type_name, *_operand_key(operand))
         found = self.known.get(key)
         if found is None:
             found = self.known[key] = operand_data(operand, type_name, self.outside)
         return found
+
+
+def _operand_key(operand: Operand | None) -> tuple:
+    """What decides an operand's data and reason: equal keys, equal outcomes."""
+    if operand is None:
+        return (None,)
+    return (operand.text, operand.form, operand.static, id(operand.declaration), operand.reason)
 
 
 def operand_label(operands: list[Operand], operand: Operand) -> str:
@@ -156,115 +163,161 @@ def operand_label(operands: list[Operand], operand: Operand) -> str:
     return f"{operand.argument.name or 'CirPoint'} {operand.text}: "
 
 
-def _site_kind(motion: MotionInstruction, emit: str) -> tuple[str, str | None]:
+def _instruction_kind(motion: MotionInstruction, emit: str) -> tuple[bool, str, str | None]:
+    """(moves to robtargets, site kind, why it is kept) for an instruction name,
+    whatever its optional arguments."""
+    if motion.target_kind != "robtarget":
+        return False, "X", None
     key = motion.name.lower()
-    if emit == "jointtargets":
-        kind = JOINT_FORM.get(key)
-        if kind is None:
-            return "X", f"{motion.name} has no joint-target form (use --emit robtargets)"
-        extra = [op.argument.name for name, op in motion.optional.items()
-                 if name not in MOVEABSJ_OPTIONS]
-        if extra:
-            return kind, f"optional argument \\{extra[0]} has no MoveAbsJ form"
-        return kind, None
-    return JOINT_FORM.get(key, "X"), None
+    if emit != "jointtargets":
+        return True, JOINT_FORM.get(key, "X"), None
+    kind = JOINT_FORM.get(key)
+    if kind is None:
+        return True, "X", f"{motion.name} has no joint-target form (use --emit robtargets)"
+    return True, kind, None
+
+
+def _optional_reason(motion: MotionInstruction) -> str | None:
+    """Why MoveAbsJ cannot take one of the instruction's optional arguments, or None."""
+    for name, op in motion.optional.items():
+        if name not in MOVEABSJ_OPTIONS:
+            return f"optional argument \\{op.argument.name} has no MoveAbsJ form"
+    return None
+
+
+@dataclass(frozen=True)
+class _Frames:
+    """The tool, work object and payload (kg) a site's targets are compensated with."""
+
+    tool: ToolData
+    wobj: WobjData | None
+    mass: float
+
+
+def _site_frames(motion: MotionInstruction, frames: _FrameCache) -> _Frames | str:
+    """The frames of a motion instruction, or why they are not known."""
+    tool_op = motion.tool
+    if tool_op is None:
+        return "no tool"
+    tool, why = frames.get(tool_op, "tooldata")
+    if tool is None:
+        return f"tool {tool_op.text}: {why}"
+    wobj = None
+    wobj_op = motion.wobj
+    if wobj_op is not None:
+        wobj, why = frames.get(wobj_op, "wobjdata")
+        if wobj is None:
+            return f"work object {wobj_op.text}: {why}"
+        if not wobj.ufprog:
+            return (f"work object {wobj_op.text} moves with mechanical unit "
+                    f"{wobj.ufmec!r}: known only at run time")
+        if wobj.robhold and tool.robhold:
+            return "tool and work object are both held by the robot"
+    if not tool.robhold and (wobj is None or not wobj.robhold):
+        return "stationary tool used without a robot-held work object"
+    mass = tool.tload.mass if tool.robhold else 0.0
+    tload = motion.optional.get("tload")
+    if tload is not None:
+        load, why = frames.get(tload, "loaddata")
+        if load is None:
+            return f"\\TLoad {tload.text}: {why}"
+        mass = load.mass
+    return _Frames(tool, wobj, mass)
+
+
+def _site_values(operands: list[Operand], outside: Declarations) -> list[tuple] | str:
+    """The raw robtarget values of a site's targets, or why one is not usable."""
+    values = []
+    for operand in operands:
+        if operand.static and operand.value is not None and operand.type_name == "robtarget":
+            data = operand.value  # the raw tuple, shape-checked by the RAPID layer
+        else:
+            data, why = _target_value(operand, outside)
+            if data is None:
+                return operand_label(operands, operand) + why
+        q = data[1]
+        if q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] < 1e-12:
+            return operand_label(operands, operand) + "orientation quaternion is zero"
+        values.append(data)
+    return values
 
 
 def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Site], Targets]:
-    """Sites for every robtarget motion instruction, and the rows of the usable targets."""
+    """Sites for every robtarget motion instruction, and the rows of the usable targets.
+
+    One cheap pass over the instructions: what depends only on an instruction's
+    name, or only on its tool / work object / load operands, is worked out once
+    per distinct name or operand set, and the numbers become arrays in one go.
+    """
     sites: list[Site] = []
-    robtargets: list[tuple] = []
-    tools: list[ToolData] = []
-    wobjs: list[WobjData | None] = []
-    masses: list[float] = []
-    owners: list[int] = []
+    values: list[tuple] = []
     operands: list[Operand] = []
+    blocks: list[tuple[int, int, int]] = []  # per compensated site: (site, rows, frame set)
     frames = _FrameCache(outside)
+    kinds: dict[str, tuple[bool, str, str | None]] = {}
+    frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
     for motion in program.motions:
-        if motion.target_kind != "robtarget":
+        info = kinds.get(motion.name)
+        if info is None:
+            info = kinds[motion.name] = _instruction_kind(motion, emit)
+        moves_to_robtargets, kind, reason = info
+        if not moves_to_robtargets:
             continue
         site_ops = motion_targets(motion)
         if not site_ops:
             continue
-        kind, reason = _site_kind(motion, emit)
+        if reason is None and emit == "jointtargets" and motion.optional:
+            reason = _optional_reason(motion)
         site = Site(motion, kind, site_ops, reason=reason)
         sites.append(site)
         if reason is not None:
             continue
-        values = []
-        for operand in site_ops:
-            data, why = _target_value(operand, outside)
-            if data is None:
-                site.reason = operand_label(site_ops, operand) + why
-                break
-            if sum(c * c for c in data[1]) < 1e-12:
-                site.reason = operand_label(site_ops, operand) + "orientation quaternion is zero"
-                break
-            values.append(data)
-        if site.reason is not None:
+        found = _site_values(site_ops, outside)
+        if isinstance(found, str):
+            site.reason = found
             continue
-        tool_op = motion.tool
-        if tool_op is None:
-            site.reason = "no tool"
+        key = (_operand_key(motion.tool), _operand_key(motion.wobj),
+               _operand_key(motion.optional.get("tload")))
+        known = frame_sets.get(key)
+        if known is None:
+            known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
+        used, index = known
+        if isinstance(used, str):
+            site.reason = used
             continue
-        tool, why = frames.get(tool_op, "tooldata")
-        if tool is None:
-            site.reason = f"tool {tool_op.text}: {why}"
-            continue
-        wobj = None
-        wobj_op = motion.wobj
-        if wobj_op is not None:
-            wobj, why = frames.get(wobj_op, "wobjdata")
-            if wobj is None:
-                site.reason = f"work object {wobj_op.text}: {why}"
-                continue
-            if not wobj.ufprog:
-                site.reason = (f"work object {wobj_op.text} moves with mechanical unit "
-                               f"{wobj.ufmec!r}: known only at run time")
-                continue
-            if wobj.robhold and tool.robhold:
-                site.reason = "tool and work object are both held by the robot"
-                continue
-        if not tool.robhold and (wobj is None or not wobj.robhold):
-            site.reason = "stationary tool used without a robot-held work object"
-            continue
-        mass = tool.tload.mass if tool.robhold else 0.0
-        tload = motion.optional.get("tload")
-        if tload is not None:
-            load, why = frames.get(tload, "loaddata")
-            if load is None:
-                site.reason = f"\\TLoad {tload.text}: {why}"
-                continue
-            mass = load.mass
-        site.rows = list(range(len(robtargets), len(robtargets) + len(values)))
-        for value, operand in zip(values, site_ops):
-            robtargets.append(value)
-            tools.append(tool)
-            wobjs.append(wobj)
-            masses.append(mass)
-            owners.append(len(sites) - 1)
-            operands.append(operand)
-    return sites, _arrays(robtargets, tools, wobjs, masses, owners, operands)
+        first = len(values)
+        site.rows = list(range(first, first + len(found)))
+        values.extend(found)
+        operands.extend(site_ops)
+        blocks.append((len(sites) - 1, len(found), index))
+    sets = [used for used, _ in frame_sets.values()]  # by index: insertion order
+    return sites, _arrays(values, operands, blocks, sets)
 
 
-def _arrays(robtargets: list[tuple], tools: list[ToolData], wobjs: list[WobjData | None],
-            masses: list[float], owners: list[int], operands: list[Operand]) -> Targets:
-    n = len(robtargets)
-    if n == 0:
+def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int, int, int]],
+            sets: list[_Frames | str]) -> Targets:
+    """The rows as arrays: raw robtarget values, and per block of rows its frame set."""
+    if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
                        Placement.identity(0), np.zeros(0), np.zeros(0, int), [])
-    trans = np.array([r[0] for r in robtargets], dtype=float)
-    rot = np.array([r[1] for r in robtargets], dtype=float)
-    conf = np.array([r[2] for r in robtargets], dtype=float).astype(int)
-    extax = np.array([r[3] for r in robtargets], dtype=float)
-    tool_frames = _poses([t.tframe for t in tools])
+    trans = np.array([r[0] for r in values], dtype=float)
+    rot = np.array([r[1] for r in values], dtype=float)
+    conf = np.array([r[2] for r in values], dtype=float).astype(int)
+    extax = np.array([r[3] for r in values], dtype=float)
+    owner, count, which = (np.array(column, dtype=int) for column in zip(*blocks))
+    row_set = np.repeat(which, count)
+    # a stand-in for the frame sets that are reasons (no row uses them)
+    usable = [f for f in sets if not isinstance(f, str)]
+    chosen = [f if not isinstance(f, str) else usable[0] for f in sets]
     identity = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-    wobj_u = _poses([w.uframe if w is not None else identity for w in wobjs])
-    wobj_o = _poses([w.oframe if w is not None else identity for w in wobjs])
-    stationary = np.array([not t.robhold for t in tools], dtype=bool)
-    placement = Placement(tool_frames, wobj_u @ wobj_o, stationary)
-    return Targets(pose(trans, rot), conf, extax, placement, np.array(masses, float),
-                   np.array(owners, int), operands)
+    tool = _poses([f.tool.tframe for f in chosen])
+    wobj_u = _poses([f.wobj.uframe if f.wobj is not None else identity for f in chosen])
+    wobj_o = _poses([f.wobj.oframe if f.wobj is not None else identity for f in chosen])
+    stationary = np.array([not f.tool.robhold for f in chosen], dtype=bool)
+    mass = np.array([f.mass for f in chosen], dtype=float)
+    placement = Placement(tool[row_set], (wobj_u @ wobj_o)[row_set], stationary[row_set])
+    return Targets(pose(trans, rot), conf, extax, placement, mass[row_set],
+                   np.repeat(owner, count), operands)
 
 
 def _poses(frames: list[Any]) -> np.ndarray:

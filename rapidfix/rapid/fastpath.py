@@ -47,10 +47,12 @@ from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_v
 _WS = r"[ \t\f\v\r\n\x1a]"
 _WORD_END = r"(?![A-Za-z0-9_])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
-# for speed; its numbers are checked when they are read (_number_group).
-_LOOSE_AGGREGATE = r"\[(?:[-+0-9.eE,]|\[[-+0-9.eE,]*\])*\]"
-# The same, for splitting a token whose syntax has been checked already.
-_VALUE_TEXT = r"\[(?:[^\[\]]|\[[^\[\]]*\])*\]|[A-Za-z0-9_.+\-]+"
+# for speed; its numbers are checked when they are read (_number_group). Runs of
+# number characters are taken whole (one step of the regex engine, not one per
+# character); as they hold no bracket, this never backtracks.
+_LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
+# A value, for splitting a token whose syntax has been checked already.
+_VALUE_TEXT = r"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|[A-Za-z0-9_.+\-]+"
 
 
 class NotFast(Exception):
@@ -135,8 +137,8 @@ def grammar_extension(grammar: str) -> str:
     )
 
 
-# Splitting a token whose syntax the lexer has checked: one piece of a run of
-# calls is an optional argument, a value (or the next call's name) or the ';'.
+# Splitting a call whose syntax the lexer has checked: after its name (or its
+# first argument), one piece is an optional argument, a required value or the ';'.
 _CALL_PIECE = re.compile(
     rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_VALUE_TEXT}))?"
     rf"|({_VALUE_TEXT})|(;))"
@@ -199,50 +201,129 @@ def _value_node(text: str, start: int) -> s.Expr:
     return s.NameRef(start, end, sys.intern(text))
 
 
-def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
-    """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
+# A call's name and its first argument when that is a value after whitespace (a
+# value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
+_CALL_HEAD = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
+# Distinct argument tails kept per token (a CAM program has a few dozen).
+_TAIL_LIMIT = 4096
 
-    Names are interned: a CAM program repeats the same few instruction, speed,
-    zone, tool and work object names on every line.
-    """
-    calls: list[s.ProcedureCall] = []
-    name: str | None = None
-    start = 0
-    args: list[s.Argument] = []
-    argument, procedure_call, name_ref, intern = s.Argument, s.ProcedureCall, s.NameRef, sys.intern
+# One argument of a tail, offsets relative to the tail: (kind, start, end,
+# optional name, value node type or None, value start, value end, what the node
+# holds besides its span).
+_TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple]
+
+
+def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
+    """(node type, start, end, other fields) of the node _value_node makes."""
+    node = _value_node(text, start)
+    if isinstance(node, s.Number):
+        return s.Number, start, node.end, (node.value, node.text)
+    if isinstance(node, s.NumericAggregate):
+        return s.NumericAggregate, start, node.end, (node.value,)
+    return s.NameRef, start, node.end, (node.name,)
+
+
+def _tail(text: str) -> tuple[_TailArgument, ...]:
+    """The arguments in checked call text that follows a call's name or first argument."""
+    entries: list[_TailArgument] = []
     for piece in _CALL_PIECE.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
-            at = base + piece.start(4)
-            if name is None:
-                name, start, args = intern(value), at, []
-            elif value[0].isalpha():
-                end = at + len(value)
-                args.append(argument(at, end, "required", None, name_ref(at, end, intern(value))))
-            else:
-                node = _value_node(value, at)
-                args.append(argument(at, node.end, "required", None, node))
+            node, at, end, fields = _value_entry(value, piece.start(4))
+            entries.append(("required", at, end, None, node, at, end, fields))
         elif slash is not None:
-            node = None if option_value is None else _value_node(
-                option_value, base + piece.start(3))
-            args.append(argument(base + piece.start(1), base + piece.end(), "optional",
-                                 intern(option), node))
+            if option_value is None:
+                entry: tuple = (None, 0, 0, ())
+            else:
+                entry = _value_entry(option_value, piece.start(3))
+            entries.append(("optional", piece.start(1), piece.end(), sys.intern(option), *entry))
         elif semi is not None:
-            calls.append(procedure_call(start, base + piece.end(), name, args))
-            name = None
+            break
+    return tuple(entries)
+
+
+def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
+    """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
+
+    A call is its name, perhaps a first argument, and a tail of further
+    arguments. In a CAM program the first argument (the target) changes from line
+    to line but the tail (speed, zone, tool, work object) recurs, so each
+    distinct tail is read once and its nodes are then made from what was read,
+    shifted to where the tail stands. Names are interned.
+    """
+    calls: list[s.ProcedureCall] = []
+    tails: dict[str, tuple[_TailArgument, ...]] = {}
+    argument, name_ref, procedure_call, intern = (
+        s.Argument, s.NameRef, s.ProcedureCall, sys.intern)
+    head, find = _CALL_HEAD.match, text.index
+    pos, size = 0, len(text)
+    while pos < size:
+        m = head(text, pos)
+        first = m.group(2)
+        args: list[s.Argument] = []
+        if first is not None:
+            at = base + m.start(2)
+            if first[0].isalpha():
+                node: s.Expr | None = name_ref(at, at + len(first), intern(first))
+            else:
+                node = _value_node(first, at)
+            args.append(argument(at, node.end, "required", None, node))
+        tail_at = m.end()
+        pos = find(";", tail_at) + 1
+        tail_text = text[tail_at:pos]
+        entries = tails.get(tail_text)
+        if entries is None:
+            entries = _tail(tail_text)
+            if len(tails) < _TAIL_LIMIT:
+                tails[tail_text] = entries
+        shift = base + tail_at
+        for kind, start, end, option, node_type, value_start, value_end, fields in entries:
+            node = None if node_type is None else node_type(
+                shift + value_start, shift + value_end, *fields)
+            args.append(argument(shift + start, shift + end, kind, option, node))
+        calls.append(procedure_call(base + m.start(1), base + pos, intern(m.group(1)), args))
     return calls
+
+
+def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
+    """aggregate_value(text), reading what follows a leading group once per distinct text.
+
+    A CAM program's robtargets differ in their first group (the position) and
+    mostly share the rest (orientation, confdata, external axes).
+    """
+    if text[1] == "[":
+        cut = text.find("]")
+        if text.startswith("],[", cut):
+            rest = text[cut + 1:]
+            items = rests.get(rest)
+            if items is None:
+                items = aggregate_value("[[0]" + rest)[1:]  # the same items after any group
+                if len(rests) < _TAIL_LIMIT:
+                    rests[rest] = items
+            first = text[2:cut]
+            return (_GROUP_CACHE.get(first) or _number_group(first), *items)
+    return aggregate_value(text)
 
 
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
     """The DataDecl nodes of a FAST_DECLS token starting at offset `base`."""
     decls: list[s.DataDecl] = []
+    rests: dict[str, tuple] = {}
+    data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
         local, task, storage, type_name, name, value = m.groups()
+        spans = m.regs
+        if value is None:
+            init = None
+        elif value[0] == "[":
+            at = base + spans[6][0]
+            init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
+        else:
+            init = _value_node(value, base + spans[6][0])
         first = 1 if local is not None else 2 if task is not None else 3
-        init = None if value is None else _value_node(value, base + m.start(6))
-        decls.append(s.DataDecl(
-            base + m.start(first), base + m.end(), storage.upper(), type_name, name,
-            base + m.start(5), [], init, local is not None, task is not None,
+        decls.append(data_decl(
+            base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
+            name, base + spans[5][0], [], init, local is not None, task is not None,
         ))
     return decls
 

@@ -9,6 +9,7 @@ line to `_TABLE` (names as in ABB's technical reference manual).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 _TABLE = """
 MoveL       ToPoint Speed Zone Tool
@@ -82,13 +83,20 @@ class MotionSpec:
     name: str
     parameters: tuple[str, ...]
 
-    @property
+    # The derived attributes are cached: they are asked for once per move of a
+    # program (a frozen dataclass still has an instance dict for cached_property).
+    @cached_property
     def target_parameters(self) -> tuple[str, ...]:
         """Parameters that are targets (CirPoint before ToPoint), as written."""
         return tuple(p for p in self.parameters
                      if p.lower() in ROBTARGET_PARAMETERS | JOINTTARGET_PARAMETERS)
 
-    @property
+    @cached_property
+    def target_keys(self) -> tuple[str, ...]:
+        """`target_parameters` in lower case, as MotionInstruction.arguments keys them."""
+        return tuple(p.lower() for p in self.target_parameters)
+
+    @cached_property
     def target_kind(self) -> str:
         """'jointtarget' for joint moves (MoveAbsJ, MoveExtJ, ...), else 'robtarget'."""
         keys = {p.lower() for p in self.parameters}

@@ -6,6 +6,11 @@
    the motion instructions with their loop depth;
 3. evaluate declarations (memoised, in dependency order) and the operands of
    every motion instruction, recording why a value is not static.
+
+A CAM program has a hundred thousand of each, so the common cases take short
+ways that give exactly what the general ones would: an all-numeric constant of
+its declared shape is taken as read, each data name is looked up once per
+routine and type, and the motions are made in one loop.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from rapidfix.rapid.program import (
 )
 from rapidfix.rapid.source import SourceText
 from rapidfix.rapid.system_data import SYSTEM_DATA
-from rapidfix.rapid.values import ValueShapeError, typed_value
+from rapidfix.rapid.values import ValueShapeError, fits_type, typed_value
 
 # role of a required parameter -> the data type it takes
 _ROLE_TYPES = {
@@ -79,16 +84,17 @@ class ModelBuilder:
         self.writes: dict[int, list[_Write]] = {}
         self.state: dict[int, bool] = {}  # False while evaluating, True when done
         self.evaluators: dict[tuple[str, str | None], Evaluator] = {}
-        self.name_operands: dict[tuple, tuple] = {}
+        # (module, routine, type hint) -> data name as spelt -> what an Operand of it holds
+        self.name_operands: dict[tuple[str, str, str | None], dict[str, tuple]] = {}
         self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool]] = []
-        self.spec_keys: dict[str, tuple[str, ...]] = {}  # instruction -> lower-case parameters
+        # procedure name as spelt -> (motion spec, positions and names it writes into)
+        self.call_kinds: dict[str, tuple[MotionSpec | None, set[int], set[str]]] = {}
+        self.module_names_as_spelt: dict[str, str] = {}
 
     # ------------------------------------------------------------ pass 1
     def _declaration(self, decl: s.DataDecl, module: str, routine: str | None) -> Declaration:
-        return Declaration(
-            name=decl.name, type_name=decl.type_name, storage=decl.storage, module=module,
-            routine=routine, syntax=decl, source=self.source, local=decl.local, task=decl.task,
-        )
+        return Declaration(decl.name, decl.type_name, decl.storage, module, routine, decl,
+                           self.source, decl.local, decl.task)
 
     def _collect(self) -> None:
         program = self.program
@@ -96,13 +102,18 @@ class ModelBuilder:
             mkey = module.name.lower()
             names = self.module_names.setdefault(mkey, {})
             last_decl_end = module.header_end
+            declarations, global_names = program.declarations, self.global_names
+            source = self.source
             for item in module.items:
-                if isinstance(item, s.DataDecl):
-                    decl = self._declaration(item, module.name, None)
-                    program.declarations.append(decl)
-                    names.setdefault(decl.key, decl)
-                    if not decl.local:
-                        self.global_names.setdefault(decl.key, decl)
+                if type(item) is s.DataDecl:
+                    decl = Declaration(item.name, item.type_name, item.storage, module.name, None,
+                                       item, source, item.local, item.task)
+                    declarations.append(decl)
+                    key = item.name.lower()
+                    if key not in names:
+                        names[key] = decl
+                    if not item.local and key not in global_names:
+                        global_names[key] = decl
                     last_decl_end = item.end
                 elif isinstance(item, s.RecordDecl):
                     self.records[item.name.lower()] = tuple(
@@ -192,22 +203,26 @@ class ModelBuilder:
         bodies = [routine.body] + [h.body for h in routine.handlers]
         for body in bodies:
             for statement, loops in s.walk_statements(body):
-                in_loop = loops > 0
-                if isinstance(statement, s.Assignment):
+                kind = type(statement)
+                if kind is s.ProcedureCall:
+                    self._scan_call(statement, module, routine, loops > 0)
+                elif kind is s.Assignment:
                     self._note_write(statement.target, module, rkey,
-                                     "assigned", statement.start, in_loop)
-                elif isinstance(statement, s.ProcedureCall):
-                    self._scan_call(statement, module, routine, in_loop)
-                elif isinstance(statement, s.For):
+                                     "assigned", statement.start, loops > 0)
+                elif kind is s.For:
                     scope.setdefault(statement.variable.lower(),
                                      _LoopVariable(statement.variable))
 
     def _scan_call(self, call: s.ProcedureCall, module: str, routine: s.Routine,
                    in_loop: bool) -> None:
-        spec = motion_spec(call.name)
+        # a CAM program calls the same few procedures on every line: look each up once
+        known = self.call_kinds.get(call.name)
+        if known is None:
+            known = self.call_kinds[call.name] = (
+                motion_spec(call.name), *self._written_positions(call))
+        spec, positions, names = known
         if spec is not None:
             self.pending.append((call, spec, module, routine.name, in_loop))
-        positions, names = self._written_positions(call)
         if not positions and not names:
             return
         how = f"written by {call.name}"
@@ -235,27 +250,13 @@ class ModelBuilder:
             self.state[id(decl)] = True
 
     def _evaluate_declaration(self, decl: Declaration) -> None:
-        module = decl.module.lower()
-        routine = decl.routine.lower() if decl.routine else None
-        evaluator = self._evaluator(module, routine)
-        try:
-            dims = tuple(evaluator.value(d) for d in decl.syntax.dims) if decl.syntax.dims else ()
-            decl.dims = tuple(int(d) for d in dims
-                              if isinstance(d, float) and d == int(d) and d >= 0)
-            if len(decl.dims) != len(dims):
-                raise NotConstant("array size is not a whole number")
-        except NotConstant as err:
-            decl.reason = f"array size unknown: {err.reason}"
+        syntax = decl.syntax
+        if not syntax.dims and type(syntax.init) is s.NumericAggregate:
+            # the bulk of a CAM program: the evaluator would return the value as read
+            decl.value, decl.static = syntax.init.value, True
+        elif not self._evaluate_value(decl):
             return
-        if decl.syntax.init is None:
-            decl.reason = "declared without a value"
-        else:
-            try:
-                decl.value = evaluator.value(decl.syntax.init)
-                decl.static = True
-            except NotConstant as err:
-                decl.reason = err.reason
-        if decl.value is not None and not decl.dims:
+        if decl.value is not None and not decl.dims and not fits_type(decl.type_name, decl.value):
             try:
                 typed_value(decl.type_name, decl.value)
             except ValueShapeError as err:
@@ -269,26 +270,61 @@ class ModelBuilder:
             decl.static = False
             decl.reason = f"{decl.storage} {decl.name} is {first.how} at line {line}{where}"
 
+    def _evaluate_value(self, decl: Declaration) -> bool:
+        """Evaluate the array size and the initial value of `decl` into it; False
+        when the size is unknown (and the declaration is then done)."""
+        module = decl.module.lower()
+        routine = decl.routine.lower() if decl.routine else None
+        evaluator = self._evaluator(module, routine)
+        try:
+            dims = tuple(evaluator.value(d) for d in decl.syntax.dims) if decl.syntax.dims else ()
+            decl.dims = tuple(int(d) for d in dims
+                              if isinstance(d, float) and d == int(d) and d >= 0)
+            if len(decl.dims) != len(dims):
+                raise NotConstant("array size is not a whole number")
+        except NotConstant as err:
+            decl.reason = f"array size unknown: {err.reason}"
+            return False
+        if decl.syntax.init is None:
+            decl.reason = "declared without a value"
+        else:
+            try:
+                decl.value = evaluator.value(decl.syntax.init)
+                decl.static = True
+            except NotConstant as err:
+                decl.reason = err.reason
+        return True
+
+    def _name_operand(self, expr: s.NameRef, type_hint: str | None, module: str,
+                      routine: str | None) -> tuple:
+        """(type name, value, static, reason, declaration) of an Operand that is a data name."""
+        found = self._find(expr.name.lower(), module, routine)
+        if type(found) is not Declaration or not self.state.get(id(found)):
+            value, type_name, static, reason = self._evaluate_operand(
+                expr, type_hint, module, routine)
+            return type_name, value, static, reason, self._declaration_named(
+                expr, module, routine)
+        # a resolved declaration: what the evaluator's lookup would give, without it
+        if not found.static or found.value is None:
+            return type_hint, None, False, f"{found.name}: {found.reason}", found
+        kind = found.type_key
+        type_name = type_hint or kind
+        if type_name != kind:
+            try:
+                typed_value(type_name, found.value)
+            except ValueShapeError as err:
+                return type_name, None, False, f"value does not fit {type_name}: {err}", found
+        return type_name, found.value, True, None, found
+
     def _operand(self, arg: s.Argument, type_hint: str | None, module: str,
                  routine: str | None) -> Operand:
+        """An operand that is not a plain data name (those are made in _motions)."""
         expr = arg.value
         if expr is None:
             form = "switch" if arg.kind == "optional" else "conditional"
             return Operand(arg, self.source, "", form, static=arg.kind == "optional",
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
-        if isinstance(expr, s.NameRef):
-            # the same speed, zone, tool or target name recurs on many lines
-            cache_key = (module, routine, expr.name, type_hint)  # as spelt: no lower()
-            cached = self.name_operands.get(cache_key)
-            if cached is None:
-                value, type_name, static, reason = self._evaluate_operand(
-                    expr, type_hint, module, routine)
-                cached = self.name_operands[cache_key] = (
-                    type_name, value, static, reason,
-                    self._declaration_named(expr, module, routine))
-            # a name's text is its node's string, shared by every use of the name
-            return Operand(arg, self.source, expr.name, "name", expr.name, *cached)
         text = self.source.text[expr.start:expr.end]
         base = expr
         if isinstance(expr, (s.Aggregate, s.NumericAggregate)):
@@ -330,39 +366,60 @@ class ModelBuilder:
                 return None, type_name, False, f"value does not fit {type_name}: {err}"
         return value, type_name, True, None
 
-    def _motion(self, call: s.ProcedureCall, spec: MotionSpec, module: str, routine: str,
-                in_loop: bool) -> MotionInstruction:
-        rkey = routine.lower()
-        keys = self.spec_keys.get(spec.name)
-        if keys is None:
-            keys = self.spec_keys[spec.name] = tuple(p.lower() for p in spec.parameters)
-        arguments: dict[str, Operand] = {}
-        optional: dict[str, Operand] = {}
-        index = 0
-        for arg in call.args:
-            if arg.kind == "required":
-                if arg.name is not None:
-                    key = arg.name.lower()
-                elif index < len(keys):
-                    key = keys[index]
-                else:
-                    key = f"#{index + 1}"
-                index += 1
-                arguments[key] = self._operand(arg, _ROLE_TYPES.get(key), module, rkey)
-            else:
-                key = arg.key or ""
-                optional[key] = self._operand(arg, _ROLE_TYPES.get(key), module, rkey)
-        return MotionInstruction(
-            name=call.name, spec=spec, module=self._module_name(module), routine=routine,
-            syntax=call, source=self.source, arguments=arguments, optional=optional,
-            in_loop=in_loop,
-        )
+    def _motions(self) -> list[MotionInstruction]:
+        """The MotionInstructions of the calls found in pass 2, in program order.
 
-    def _module_name(self, key: str) -> str:
-        for module in self.program.modules:
-            if module.name.lower() == key:
-                return module.name
-        return key  # pragma: no cover - every key comes from a module
+        This runs once per move of a program, so it is written as one loop with
+        its tables in local variables.
+        """
+        source, module_names, name_operand, general = (
+            self.source, self.module_names_as_spelt, self._name_operand, self._operand)
+        name_ref, operand, role_types = s.NameRef, Operand, _ROLE_TYPES
+        # (instruction, module, routine) -> per required position: (parameter key,
+        # type hint, operand cache: data name as spelt -> what an Operand of it holds)
+        layouts: dict[tuple[str, str, str], tuple[tuple[str, str | None, dict], ...]] = {}
+        caches = self.name_operands  # (module, routine, type hint) -> operand cache
+        motions: list[MotionInstruction] = []
+        for call, spec, module, routine, in_loop in self.pending:
+            rkey = routine.lower()
+            roles = layouts.get((spec.name, module, rkey))
+            if roles is None:
+                roles = layouts[(spec.name, module, rkey)] = tuple(
+                    (key, role_types.get(key),
+                     caches.setdefault((module, rkey, role_types.get(key)), {}))
+                    for key in (p.lower() for p in spec.parameters))
+            arguments: dict[str, Operand] = {}
+            optional: dict[str, Operand] = {}
+            index = 0
+            for arg in call.args:
+                if arg.kind == "required":
+                    if arg.name is None and index < len(roles):
+                        key, hint, cache = roles[index]
+                    else:
+                        key = arg.name.lower() if arg.name is not None else f"#{index + 1}"
+                        hint = role_types.get(key)
+                        cache = caches.setdefault((module, rkey, hint), {})
+                    index += 1
+                    into = arguments
+                else:
+                    key = arg.key or ""
+                    hint = role_types.get(key)
+                    cache = caches.setdefault((module, rkey, hint), {})
+                    into = optional
+                expr = arg.value
+                if type(expr) is name_ref:
+                    # the same speed, zone, tool or target name recurs on many lines
+                    name = expr.name  # as spelt: no lower()
+                    cached = cache.get(name)
+                    if cached is None:
+                        cached = cache[name] = name_operand(expr, hint, module, rkey)
+                    # a name's text is its node's string, shared by every use of the name
+                    into[key] = operand(arg, source, name, "name", name, *cached)
+                else:
+                    into[key] = general(arg, hint, module, rkey)
+            motions.append(MotionInstruction(call.name, spec, module_names[module], routine,
+                                             call, source, arguments, optional, in_loop))
+        return motions
 
     # ------------------------------------------------------------ all passes
     def build(self) -> Program:
@@ -372,9 +429,28 @@ class ModelBuilder:
             for item in module.items:
                 if isinstance(item, s.Routine):
                     self._scan_routine(item, module.name.lower())
+        for module in reversed(self.program.modules):  # the first of a name wins
+            self.module_names_as_spelt[module.name.lower()] = module.name
+        state, resolve, writes = self.state, self._resolve, self.writes
+        numeric_aggregate = s.NumericAggregate
         for decl in self.program.declarations:
-            self._resolve(decl)
-        self.program.motions = [self._motion(*pending) for pending in self.pending]
+            key = id(decl)
+            if key in state:
+                continue
+            # the bulk of a CAM program, as _resolve would do it: an all-numeric
+            # value of the declared shape, never written to
+            syntax = decl.syntax
+            init = syntax.init
+            if (type(init) is numeric_aggregate and not syntax.dims and key not in writes
+                    and fits_type(decl.type_name, init.value)):
+                decl.value, decl.static = init.value, True
+                state[key] = True
+            else:
+                resolve(decl)
+        self.program.motions = self._motions()
+        # The evaluators' lookups refer back to this builder: break that cycle so
+        # that reference counting frees the builder's tables at once.
+        self.evaluators.clear()
         return self.program
 
 

@@ -152,8 +152,8 @@ class MotionInstruction:
     @property
     def targets(self) -> list[Operand]:
         """Target operands in order (CirPoint before ToPoint)."""
-        return [self.arguments[p.lower()] for p in self.spec.target_parameters
-                if p.lower() in self.arguments]
+        arguments = self.arguments
+        return [arguments[key] for key in self.spec.target_keys if key in arguments]
 
     @property
     def target(self) -> Operand | None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from itertools import chain
 
 
 @dataclass(slots=True, eq=False)
@@ -337,6 +338,9 @@ class Routine(Node):
 
 ModuleItem = DataDecl | RecordDecl | AliasDecl | Routine
 
+# Statements that hold statement lists (those that define bodies()).
+COMPOUND_STATEMENTS = frozenset({If, CompactIf, For, While, Test})
+
 
 @dataclass(slots=True, eq=False)
 class Module(Node):
@@ -353,18 +357,23 @@ class SourceFile(Node):
 
 
 def walk_statements(body: list[Statement], depth: int = 0) -> Iterator[tuple[Statement, int]]:
-    """Every statement in `body` and nested in it, with its loop depth (FOR/WHILE)."""
-    stack: list[tuple[list[Statement], int, int]] = [(body, 0, depth)]
+    """Every statement in `body` and nested in it, with its loop depth (FOR/WHILE).
+
+    In source order, each statement before those nested in it; iterative, so that
+    deep nesting needs no recursion. A body of simple statements (a CAM program's
+    hundred thousand moves) is one plain loop.
+    """
+    stack: list[tuple[Iterator[Statement], int]] = [(iter(body), depth)]
     while stack:
-        statements, index, loops = stack.pop()
-        if index >= len(statements):
-            continue
-        statement = statements[index]
-        stack.append((statements, index + 1, loops))
-        yield statement, loops
-        inner = loops + 1 if isinstance(statement, (For, While)) else loops
-        for nested in reversed(list(statement.bodies())):
-            stack.append((nested, 0, inner))
+        statements, loops = stack[-1]
+        for statement in statements:
+            yield statement, loops
+            if type(statement) in COMPOUND_STATEMENTS:
+                inner = loops + 1 if isinstance(statement, (For, While)) else loops
+                stack.append((chain.from_iterable(list(statement.bodies())), inner))
+                break
+        else:
+            stack.pop()
 
 
 def walk_expression(expr: Expr | None) -> Iterator[Expr]:

@@ -8,6 +8,7 @@ a known type into one of the dataclasses below (quaternions [w, x, y, z]).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from itertools import repeat
 from typing import Any
@@ -142,8 +143,10 @@ def to_pose(value: Value) -> Pose:
 
 def to_robtarget(value: Value) -> RobTarget:
     trans, rot, conf, extax = _parts(value, 4)
-    return RobTarget(_nums(trans, 3), _nums(rot, 4),
-                     tuple(map(int, _nums(conf, 4))), _nums(extax, 6))
+    conf = _nums(conf, 4)
+    if not all(map(math.isfinite, conf)):
+        raise ValueShapeError(f"expected whole numbers in confdata, got {conf!r}")
+    return RobTarget(_nums(trans, 3), _nums(rot, 4), tuple(map(int, conf)), _nums(extax, 6))
 
 
 def to_jointtarget(value: Value) -> JointTarget:
@@ -187,6 +190,41 @@ _CONVERTERS = {
     "zonedata": to_zonedata,
     "pose": to_pose,
 }
+
+
+def _robtarget_fits(value: Value) -> bool:
+    if type(value) is not tuple or len(value) != 4:
+        return False
+    trans, rot, conf, extax = value
+    if not type(trans) is type(rot) is type(conf) is type(extax) is tuple:
+        return False
+    if (len(trans), len(rot), len(conf), len(extax)) != (3, 4, 4, 6):
+        return False
+    return (all(map(isinstance, trans + rot + conf + extax, repeat(float)))
+            and all(map(math.isfinite, conf)))
+
+
+def _jointtarget_fits(value: Value) -> bool:
+    if type(value) is not tuple or len(value) != 2:
+        return False
+    robax, extax = value
+    if not type(robax) is type(extax) is tuple or len(robax) != 6 or len(extax) != 6:
+        return False
+    return all(map(isinstance, robax + extax, repeat(float)))
+
+
+# Quick tests for the types programs hold by the hundred thousand.
+_FITS = {"robtarget": _robtarget_fits, "jointtarget": _jointtarget_fits}
+
+
+def fits_type(type_name: str, value: Value) -> bool:
+    """True when `typed_value(type_name, value)` certainly succeeds, tested
+    without building the typed view; False means only: ask typed_value."""
+    key = type_name.lower()
+    fits = _FITS.get(key)
+    if fits is None:
+        return key not in _CONVERTERS
+    return fits(value)
 
 
 def typed_value(type_name: str, value: Value) -> Any:

@@ -74,8 +74,13 @@ def detectable_seeds(
 ) -> list[int]:
     """The first `count` seeds whose hidden effect moves the ball by at least
     `factor` × the noise floor: an effect smaller than the noise cannot be named."""
-    seeds = [s for s in candidates if hidden_size_mm(effects, s) >= factor * floor_mm]
-    return seeds[:count]
+    seeds: list[int] = []
+    for seed in candidates:  # in order, and no further than needed (each costs a session)
+        if len(seeds) == count:
+            break
+        if hidden_size_mm(effects, seed) >= factor * floor_mm:
+            seeds.append(seed)
+    return seeds
 
 
 @pytest.fixture(scope="session")

@@ -102,6 +102,21 @@ def test_poe_matches_independent_link_chain(name):
     assert np.abs(c - opw_wrist_centre(name, q)).max() < 1e-9
 
 
+def test_batches_go_through_in_chunks_with_every_row_in_place(monkeypatch):
+    from rapidfix.kinematics import screws
+
+    name = "IRB2600-12/1.65"
+    robot = load_robot(name)
+    q = np.random.default_rng(12).uniform(robot.limits[:, 0], robot.limits[:, 1], (23, 6))
+    whole = robot.fk(q), robot.joint_frames(q)[1]
+    monkeypatch.setattr(screws, "CHUNK", 5)  # four full chunks and a short one
+    T, points = robot.fk(q), robot.joint_frames(q)[1]
+    assert np.abs(T[:, :3, 3] - link_chain_fk(name, q)[:, :3, 3]).max() < 1e-9
+    assert np.abs(points[:, 4] - opw_wrist_centre(name, q)).max() < 1e-9
+    assert np.allclose(T, whole[0], rtol=0, atol=1e-12)
+    assert np.allclose(points, whole[1], rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("name", ROBOTS)
 def test_tiny_angles_are_exact(name):
     robot = load_robot(name)

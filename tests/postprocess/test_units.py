@@ -224,7 +224,9 @@ def test_placement_matches_the_kinematics_frames_for_both_tool_kinds():
     assert np.allclose(placement.tcp(flange), target)
 
 
-def test_ik_on_conf_gives_what_the_kinematics_ik_conf_gives(cell):
+def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell):
+    from rapidfix.kinematics import IKStatus
+    from rapidfix.kinematics.confdata import conf_matches
     from rapidfix.postprocess.plan import ik_on_conf
 
     robot = cell["robot"]
@@ -238,10 +240,20 @@ def test_ik_on_conf_gives_what_the_kinematics_ik_conf_gives(cell):
         [rng.integers(-2, 2, (len(conf[::3]), 3)), rng.integers(0, 8, len(conf[::3]))]
     )
     poses[7, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
-    want_q, want_status = robot.ik_conf(poses, conf)
+    # reference: the first slot, over every branch and ±360° variant, whose joints are
+    # valid and have the confdata
+    sols = robot.ik(poses)
+    match = sols.valid & conf_matches(robot, sols.q, conf[:, None, :])
+    found = match.any(axis=1)
+    slot = np.argmax(match, axis=1)
+    want_q = np.where(found[:, None], sols.q[np.arange(len(conf)), slot], np.nan)
+    want_status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF)
+    want_status[found & sols.singular[np.arange(len(conf)), slot]] = IKStatus.WRIST_SINGULAR
+    none = ~sols.valid.any(axis=1)
+    want_status[none] = sols.status[none]
     got_q, got_status = ik_on_conf(robot, poses, conf)
-    assert np.array_equal(np.asarray(want_status), np.asarray(got_status))
-    assert np.allclose(np.nan_to_num(want_q, nan=7.0), np.nan_to_num(got_q, nan=7.0))
+    assert np.array_equal(want_status, np.asarray(got_status))
+    assert np.array_equal(np.nan_to_num(want_q, nan=7.0), np.nan_to_num(got_q, nan=7.0))
     assert {0, 1, 4}.issubset(set(np.asarray(got_status).tolist()))
 
 

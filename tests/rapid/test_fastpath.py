@@ -15,7 +15,13 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
-from rapidfix.rapid.fastpath import NotFast, aggregate_value, fast_parser, parse_text
+from rapidfix.rapid.fastpath import (
+    NotFast,
+    aggregate_value,
+    fast_parser,
+    parse_text,
+    shared_aggregate_value,
+)
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.source import decode_source
 from rapidfix.rapid.transform import numeric_aggregate_value
@@ -68,6 +74,16 @@ FAST = {
     ),
     "numbers": routine("Foo 0x1F, 0b101, 0o17, .5, 9E+09, 1.5e-3, 2.;", "WaitTime 0.5;"),
     "no arguments": routine("Stop;", "Path_10;", "ENDPROCx;"),
+    "long and unusual argument lists": routine(
+        "Foo 1, 2, 3, 4, 5, 6, 7, 8;",
+        "Foo 1, 2, 3, 4, 5, 6, 7, 8, 9 \\A:=3;",
+        "Foo a \\A \\B \\C \\D \\E:=1;",
+        "Foo \\A, \\B, a;",
+        "Foo a \\B, c;",
+        "Foo a, [1,2], [[1,2],[3]] \\V:=[1,2,3,4] \\W:=.5;",
+        "MoveL p1 , v100 , z1 , tool0 \\WObj := w , \\Conc ;",
+        "Foo.5;WaitTime 1;Stop ;",
+    ),
     "keywords as plain names": routine("MoveL Step, v100, z1, tool0 \\WObj:=Default;"),
     "module data": module(
         "CONST robtarget p1:=" + TARGET + ";",
@@ -199,6 +215,31 @@ def test_aggregate_values_match_the_grammar_reader(text):
 def test_malformed_aggregates_are_left_to_the_grammar(text):
     with pytest.raises(NotFast):
         aggregate_value(text)
+
+
+number_chars = st.text(alphabet="-+0123456789.eE,", max_size=8)
+
+
+@st.composite
+def loose_aggregate(draw: st.DrawFn) -> str:
+    """Text of the shape the lexer's loose aggregate pattern lets through."""
+    items = draw(st.lists(number_chars.map(lambda c: f"[{c}]") | number_chars, max_size=5))
+    return "[" + draw(st.sampled_from([",", ""])).join(items) + "]"
+
+
+def read(fn, *args):
+    try:
+        return repr(fn(*args))
+    except NotFast:
+        return "NotFast"
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(loose_aggregate(), min_size=1, max_size=4))
+def test_sharing_what_follows_a_leading_group_reads_the_same_values(texts):
+    rests: dict[str, tuple] = {}
+    for text in texts + ["[[1" + t[t.find("]"):] for t in texts if "]" in t[:-1]]:
+        assert read(shared_aggregate_value, text, rests) == read(aggregate_value, text)
 
 
 PIECES = [

@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+import gc
 import math
+import weakref
 
 import numpy as np
 import pytest
 
 from rapidfix.rapid import JointTarget, RobTarget, ToolData, WobjData, parse_program
+from rapidfix.rapid import parse as parse_module
+from rapidfix.rapid.fastpath import parse_text
+from rapidfix.rapid.model_builder import ModelBuilder
+from rapidfix.rapid.source import decode_source
 
 UNUSED = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 
@@ -282,3 +288,45 @@ def test_module_declaration_area():
     module_info = program.modules[0]
     assert text[:module_info.declarations_end].endswith("VAR num b;")
     assert text[:module_info.header_end].endswith("MODULE T")
+
+
+def test_confdata_beyond_any_whole_number_is_a_reason_not_a_crash():
+    program = parse_program(module(
+        f"CONST robtarget p := [[1,2,3],[1,0,0,0],[0,1e999,0,0],{UNUSED}];",
+        "  MoveL p, v100, z10, tool0;"))
+    decl = program.declaration("p")
+    assert not decl.static and decl.value is None
+    assert "does not fit robtarget" in decl.reason and "confdata" in decl.reason
+    assert not program.motions[0].target.static
+
+
+# ---------------------------------------------------------------- memory
+def test_the_builder_is_freed_by_reference_counting_alone():
+    source = decode_source(module(
+        f"CONST robtarget p := [[1,2,3],[1,0,0,0],[0,0,0,0],{UNUSED}];\nCONST num d := 2;",
+        "  MoveL Offs(p, d, 0, 0), v100, z10, tool0;\n  MoveL p, v100, z10, tool0;"))
+    builder = ModelBuilder(source, source.encode(), parse_text(source.text))
+    program = builder.build()
+    assert program.motions[0].target.data.trans == (3.0, 2.0, 3.0)
+    gone = weakref.ref(builder)
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        del builder
+        assert gone() is None  # no reference cycle keeps it (and its tables) alive
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def test_a_large_build_hands_its_objects_to_the_oldest_generation(monkeypatch):
+    monkeypatch.setattr(parse_module, "_MANY_OBJECTS", 1000)
+    data = "\n".join(f"CONST robtarget p{i} := [[{i},0,0],[1,0,0,0],[0,0,0,0],{UNUSED}];"
+                     for i in range(300))
+    body = "\n".join(f"  MoveL p{i}, v100, z10, tool0;" for i in range(300))
+    full_collections = gc.get_stats()[2]["collections"]
+    program = parse_program(module(data, body))
+    assert len(program.motions) == 300
+    if gc.isenabled():
+        assert gc.get_stats()[2]["collections"] == full_collections + 1
+        assert gc.get_count()[0] < 1000  # the young generation starts empty
