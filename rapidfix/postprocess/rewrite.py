@@ -43,7 +43,7 @@ from rapidfix.postprocess.path import Curves, Refinement, refine
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
 from rapidfix.postprocess.resolve import Declarations, Site, operand_label, resolve
-from rapidfix.postprocess.verify import Expected, parse_units, predicted_deviation
+from rapidfix.postprocess.verify import Expected, predicted_deviation, read_back
 from rapidfix.rapid import MotionInstruction, Program, parse_program
 from rapidfix.rapid.edit import Editor
 from rapidfix.rapid.format import format_declaration
@@ -560,8 +560,8 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         _module_indent(program), "\n"))
     job.units.comments.extend(header.lines())
     output = job.editor.render()
-    motions = parse_units(job.units, filename)
-    deviation = predicted_deviation(comp.model, comp.robot, motions, expected)
+    read = read_back(job.units, filename, expected)
+    deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
     worst = float(deviation.max()) if deviation.size else None
     return RewriteResult(
         filename=filename,

@@ -12,6 +12,8 @@ and the intended TCP is the predicted deviation.
 
 from __future__ import annotations
 
+import bisect
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,7 +27,10 @@ from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
 from rapidfix.postprocess.resolve import motion_targets
-from rapidfix.rapid import MotionInstruction
+from rapidfix.rapid import MotionInstruction, motion_spec
+from rapidfix.rapid.bulk import BulkProgram, read_bulk
+from rapidfix.rapid.fastpath import NotFast, aggregate_value
+from rapidfix.rapid.values import fits_type
 
 
 @dataclass(frozen=True)
@@ -44,7 +49,8 @@ class Expected:
 
 
 def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
-    """Parse the rewritten parts; their motion instructions by statement id.
+    """Parse the rewritten parts with the full program model; their motion
+    instructions by statement id.
 
     An error here is a bug of the rewrite: it is reported and nothing is written.
     """
@@ -58,14 +64,49 @@ def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
         ) from None
 
 
-def commanded_joints(
-    robot: Any, motions: list[MotionInstruction], expected: Expected
-) -> np.ndarray:
-    """Joints (K,6) rad the controller commands for the expected targets of the output."""
+@dataclass(frozen=True)
+class ReadBack:
+    """The targets the output commands, per checked pose (rows of `Expected`):
+    `joint` (K,) True for a jointtarget, else a robtarget; `robax` (K,6) degrees of
+    the jointtargets; `trans` (K,3), `rot` (K,4), `conf` (K,4) of the robtargets
+    (rows of the other kind hold zeros)."""
+
+    joint: np.ndarray
+    robax: np.ndarray
+    trans: np.ndarray
+    rot: np.ndarray
+    conf: np.ndarray
+
+    @classmethod
+    def empty(cls, k: int) -> ReadBack:
+        return cls(np.zeros(k, bool), np.zeros((k, 6)), np.zeros((k, 3)), np.zeros((k, 4)),
+                   np.zeros((k, 4)))
+
+
+def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
+    """Parse the rewritten parts and read the target of every expected pose from them.
+
+    Rewritten parts made of simple statements only (a CAM program's) are read in
+    bulk (`rapidfix.rapid.bulk`: Lark parses them with the same grammar, and the
+    values are read once per run); anything else, and anything the bulk reader
+    does not take, goes the full route through the program model, which also
+    explains a syntax error. Both give the same values (tests compare them).
+    """
+    text, order = units.text()
+    bulk = read_bulk(text)
+    if bulk is not None:
+        try:
+            return _read_bulk_targets(bulk, order, expected)
+        except _NotBulk:
+            pass
+    return read_back_full(units, filename, expected)
+
+
+def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
+    """`read_back` through the full program model (`parse_units`)."""
+    motions = parse_units(units, filename)
     k = expected.motion.shape[0]
-    q = np.zeros((k, 6))
-    joint_rows, joint_vals = [], []
-    rob_rows, rob_vals = [], []
+    out = ReadBack.empty(k)
     for i, (m, slot) in enumerate(zip(expected.motion.tolist(), expected.slot.tolist())):
         operand = motion_targets(motions[m])[slot]
         value = operand.value if operand.static else None
@@ -76,38 +117,143 @@ def commanded_joints(
                 hint="please report this as a rapidfix bug")
         # raw values, already checked against their type by the RAPID layer
         if operand.type_name == "jointtarget":
-            joint_rows.append(i)
-            joint_vals.append(value[0])
+            out.joint[i] = True
+            out.robax[i] = value[0]
         else:
-            rob_rows.append(i)
-            rob_vals.append(value[:3])
+            out.trans[i], out.rot[i], out.conf[i] = value[:3]
+    return out
+
+
+class _NotBulk(Exception):
+    """The bulk reader met a target it does not read (the full route decides)."""
+
+
+_JOINT_LITERAL = re.compile(r"\[\[([-+0-9.eE,]*)\],\[([-+0-9.eE,]*)\]\]")
+
+
+def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) -> ReadBack:
+    calls = bulk.calls
+    if len(calls) != len(order):
+        raise _NotBulk
+    index_of = [0] * len(order)  # statement id -> its call
+    for i, ident in enumerate(order):
+        index_of[ident] = i
+    run_starts = [r[0] for r in bulk.runs]
+    k = expected.motion.shape[0]
+    out = ReadBack.empty(k)
+    positions: dict[str, tuple[tuple[int, ...], str]] = {}
+    joint_rows: list[int] = []
+    joint_texts: list[str] = []
+    rob_values: dict[str, tuple] = {}
+    for i, (m, slot) in enumerate(zip(expected.motion.tolist(), expected.slot.tolist())):
+        c = index_of[m]
+        name = calls[c][0]
+        layout = positions.get(name)
+        if layout is None:
+            spec = motion_spec(name)
+            if spec is None:
+                raise _NotBulk
+            layout = positions[name] = (
+                tuple(spec.parameters.index(p) for p in spec.target_parameters),
+                spec.target_kind)
+        where, inline_type = layout
+        required = bulk.arguments(c)[0]
+        if slot >= len(where) or where[slot] >= len(required):
+            raise _NotBulk
+        text = required[where[slot]]
+        if text[0] == "[":
+            type_name = inline_type
+        else:
+            _, module, routine = bulk.runs[bisect.bisect_right(run_starts, c) - 1]
+            found = bulk.lookup(module, routine, text)
+            if found is None or found[1] is None:
+                raise _NotBulk
+            type_name, text = found
+        if type_name == "jointtarget":
+            joint_rows.append(i)
+            joint_texts.append(text)
+        elif type_name == "robtarget":
+            value = rob_values.get(text)
+            if value is None:
+                value = rob_values[text] = _robtarget_value(text)
+            out.trans[i], out.rot[i], out.conf[i] = value
+        else:
+            raise _NotBulk
     if joint_rows:
-        single = np.asarray(joint_vals, dtype=np.float32).astype(float)
-        q[joint_rows] = np.radians(single)
-    if rob_rows:
-        rows = np.asarray(rob_rows)
-        trans = np.array([v[0] for v in rob_vals], dtype=np.float32).astype(float)
-        rot = np.array([v[1] for v in rob_vals], dtype=np.float32).astype(float)
-        conf = np.array([v[2] for v in rob_vals], dtype=int)
+        out.joint[joint_rows] = True
+        out.robax[joint_rows] = _joint_values(joint_texts)
+    return out
+
+
+def _robtarget_value(text: str) -> tuple:
+    try:
+        value = aggregate_value(text)
+    except NotFast:
+        raise _NotBulk from None
+    if not fits_type("robtarget", value):  # the full route decides
+        raise _NotBulk
+    return value[:3]
+
+
+def _joint_values(texts: list[str]) -> np.ndarray:
+    """Robot axes (K,6) of jointtarget literals `[[j1..j6],[e1..e6]]`, read in one pass."""
+    match = _JOINT_LITERAL.fullmatch
+    groups = []
+    extax_ok: dict[str, bool] = {}
+    for text in texts:
+        m = match(text)
+        if m is None:
+            raise _NotBulk
+        robax, extax = m.groups()
+        ok = extax_ok.get(extax)
+        if ok is None:
+            ok = extax_ok[extax] = extax.count(",") == 5 and _numbers(extax)
+        if not ok or robax.count(",") != 5:
+            raise _NotBulk
+        groups.append(robax)
+    try:
+        return np.array(",".join(groups).split(","), dtype=float).reshape(-1, 6)
+    except ValueError:
+        raise _NotBulk from None
+
+
+def _numbers(group: str) -> bool:
+    try:
+        tuple(map(float, group.split(",")))
+    except ValueError:
+        return False
+    return True
+
+
+def commanded_joints(robot: Any, read: ReadBack, expected: Expected,
+                     filename: str = "") -> np.ndarray:
+    """Joints (K,6) rad the controller commands for the targets read back from the output."""
+    k = expected.motion.shape[0]
+    q = np.zeros((k, 6))
+    if read.joint.any():
+        q[read.joint] = np.radians(read.robax[read.joint].astype(np.float32).astype(float))
+    rows = np.flatnonzero(~read.joint)
+    if rows.size:
+        trans = read.trans[rows].astype(np.float32).astype(float)
+        rot = read.rot[rows].astype(np.float32).astype(float)
+        conf = read.conf[rows].astype(int)
         flange = expected.placement.take(rows).flange(pose(trans, rot))
         q_rob, status = ik_on_conf(robot, flange, conf)
-        bad = np.flatnonzero(np.asarray(status) != 0)
-        if bad.size:
-            m = motions[int(expected.motion[rows[bad[0]]])]
+        if np.any(np.asarray(status) != 0):
             raise RapidSemanticError("a filtered robtarget has no solution on its confdata",
-                                     file=m.span.file, line=m.span.line,
+                                     file=filename or None,
                                      hint="please report this as a rapidfix bug")
         q[rows] = q_rob
     return q
 
 
 def predicted_deviation(
-    model: ErrorModel, robot: Any, motions: list[MotionInstruction], expected: Expected
+    model: ErrorModel, robot: Any, read: ReadBack, expected: Expected, filename: str = ""
 ) -> np.ndarray:
     """Predicted TCP position error (K,) mm of every expected pose of the output."""
     if expected.motion.shape[0] == 0:
         return np.zeros(0)
-    q = commanded_joints(robot, motions, expected)
+    q = commanded_joints(robot, read, expected, filename)
     flange = model.actual_flange(robot, q, Context(payload_kg=expected.payload_kg))
     tcp = expected.placement.tcp(flange)
     return np.linalg.norm(tcp[:, :3, 3] - expected.tcp[:, :3, 3], axis=1)

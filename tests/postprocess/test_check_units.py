@@ -8,15 +8,23 @@ does not parse stops the rewrite and nothing is written.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rapidfix.exceptions import RapidSemanticError
 from rapidfix.postprocess import rewrite as rewrite_module
+from rapidfix.postprocess import verify as verify_module
 from rapidfix.postprocess.resolve import motion_targets
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file, rewrite_source
+from rapidfix.postprocess.verify import parse_units, read_back_full
 from rapidfix.rapid import parse_program
+from rapidfix.rapid.bulk import read_bulk
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from cam_program import cam_program
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mod", ".prg"))
@@ -24,15 +32,21 @@ PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mo
 
 def _rewrite_capturing_units(monkeypatch, data, name, comp, options):
     captured = {}
-    original = rewrite_module.parse_units
+    original = rewrite_module.read_back
 
-    def spy(units, filename):
-        captured["units"] = units
-        captured["motions"] = original(units, filename)
-        return captured["motions"]
+    def spy(units, filename, expected):
+        captured["units"], captured["expected"] = units, expected
+        captured["motions"] = parse_units(units, filename)  # the full route, on its own
+        captured["read"] = original(units, filename, expected)
+        return captured["read"]
 
-    monkeypatch.setattr(rewrite_module, "parse_units", spy)
+    monkeypatch.setattr(rewrite_module, "read_back", spy)
     return rewrite_source(data, name, comp, options), captured
+
+
+def _same_read(a, b):
+    for field in ("joint", "robax", "trans", "rot", "conf"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
 
 
 def _text(program, node):
@@ -72,6 +86,59 @@ def test_check_units_hold_every_change_and_read_back_what_the_output_commands(
             assert ours.value == theirs.value
             compared += 1
     assert compared >= len(captured["motions"])
+    # what the rewrite read back (in bulk where it could) is what the full model reads
+    _same_read(captured["read"], read_back_full(captured["units"], name, captured["expected"]))
+
+
+def test_a_cam_program_is_read_back_in_bulk_with_the_values_the_model_reads(
+        monkeypatch, comp):
+    text = cam_program(300)
+
+    def full_route(*args):
+        raise AssertionError("the CAM program's parts went the full route")
+
+    monkeypatch.setattr(verify_module, "read_back_full", full_route)
+    result, captured = _rewrite_capturing_units(monkeypatch, text.encode(), "cam.mod", comp,
+                                                RewriteOptions())
+    monkeypatch.undo()
+    assert result.moves_compensated == 300
+    check_text, order = captured["units"].text()
+    bulk = read_bulk(check_text)
+    assert bulk is not None and len(bulk.calls) == len(order) == 300
+    full = read_back_full(captured["units"], "cam.mod", captured["expected"])
+    assert full.joint.all()
+    _same_read(captured["read"], full)
+    # and the joints are those the motions of the full parse name
+    for ident, motion in enumerate(captured["motions"][:20]):
+        row = np.flatnonzero(captured["expected"].motion == ident)[0]
+        assert motion_targets(motion)[0].value[0] == tuple(full.robax[row])
+
+
+@pytest.mark.parametrize("text", [
+    "MODULE m\nPROC p()\n  IF a MoveL p1, v100, z1, tool0;\nENDPROC\nENDMODULE\n",
+    "MODULE m\nVAR num a{2};\nENDMODULE\n",
+    "MODULE m\nPROC p()\n  MoveL Offs(p1, 1, 0, 0), v100, z1, tool0;\nENDPROC\nENDMODULE\n",
+    "MODULE m\nPROC p()\n  MoveL p1, v100, z1, tool0\nENDPROC\nENDMODULE\n",
+    "MODULE m\nPROC p(num x)\n  MoveL p1, v100, z1, tool0;\nENDPROC\nENDMODULE\n",
+])
+def test_the_bulk_reader_declines_what_is_not_simple_or_does_not_parse(text):
+    assert read_bulk(text) is None
+
+
+def test_the_bulk_reader_reads_scopes_and_arguments():
+    text = ("MODULE m\nCONST jointtarget j:=[[1,2,3,4,5,6],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+            "PROC p()\n  LOCAL CONST jointtarget j:=[[6,5,4,3,2,1],[0,0,0,0,0,0]];\n"
+            "  MoveAbsJ j\\NoEOffs, v100, fine, tool0 \\WObj:=w;\n"
+            "  MoveC\\Conc, c1, [[1,2,3],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]], v5, z1, t;\n"
+            "ENDPROC\nPROC q()\n  MoveAbsJ j, v100, z1, tool0;\nENDPROC\nENDMODULE\n")
+    bulk = read_bulk(text)
+    assert bulk is not None and [c[0] for c in bulk.calls] == ["MoveAbsJ", "MoveC", "MoveAbsJ"]
+    assert bulk.arguments(0) == (("j", "v100", "fine", "tool0"), {"noeoffs": None, "wobj": "w"})
+    assert bulk.arguments(1)[0][:2] == ("c1", "[[1,2,3],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]")
+    assert bulk.arguments(1)[1] == {"conc": None}
+    assert [bulk.scope(i) for i in range(3)] == [("m", "p"), ("m", "p"), ("m", "q")]
+    assert bulk.lookup("m", "p", "J")[1] == "[[6,5,4,3,2,1],[0,0,0,0,0,0]]"
+    assert bulk.lookup("m", "q", "j")[1].startswith("[[1,2,3")
 
 
 def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, comp, tmp_path):
