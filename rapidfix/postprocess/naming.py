@@ -20,6 +20,8 @@ _BAD = re.compile(r"[^A-Za-z0-9_]+")
 
 def identifiers_in(text: str) -> set[str]:
     """Every identifier-shaped word of a RAPID text, lower-cased (a superset is harmless)."""
+    if text.isascii():  # lower-casing first is quicker and, for ASCII, the same
+        return set(_IDENT.findall(text.lower()))
     return {word.lower() for word in _IDENT.findall(text)}
 
 
@@ -39,15 +41,17 @@ class NameAllocator:
 
     def allocate(self, stem: str, prefix: str = "jt_") -> str:
         """A fresh identifier `prefix + stem`, suffixed `_2`, `_3`, … when taken."""
-        clean = _BAD.sub("_", stem).strip("_") or "target"
-        base = prefix + clean
+        # an identifier-shaped stem (the usual case) needs no cleaning
+        clean = stem if stem.isascii() and stem.isidentifier() else _BAD.sub("_", stem)
+        base = prefix + (clean.strip("_") or "target")
         if not base[0].isalpha():
             base = "t" + base
         candidate = base[:MAX_IDENTIFIER]
         counter = 1
-        while not self.is_free(candidate):
+        taken = self._taken
+        while candidate.lower() in taken:
             counter += 1
             suffix = f"_{counter}"
             candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
-        self.reserve(candidate)
+        taken.add(candidate.lower())
         return candidate

@@ -160,26 +160,40 @@ def _indent_before(program: Program, offset: int) -> str | None:
 def _statement_variant(program: Program, motion: MotionInstruction, edits: list[tuple]) -> str:
     """The statement's text with local (start, end, text) edits (absolute offsets)."""
     text = program.text
-    start, end = motion.span.start, motion.span.end
-    out, pos = [], start
+    syntax = motion.syntax
+    out, pos = [], syntax.start
     for a, b, new in sorted(edits):
         out.append(text[pos:a])
         out.append(new)
         pos = b
-    out.append(text[pos:end])
+    out.append(text[pos:syntax.end])
     return "".join(out)
 
 
 def _joint_edits(site: Site, name: str) -> list[tuple]:
     """Edits turning a MoveL/MoveJ/MoveC statement into MoveAbsJ to `name`."""
-    motion = site.motion
-    edits: list[tuple] = [(motion.name_span.start, motion.name_span.end, "MoveAbsJ")]
+    syntax = site.motion.syntax
+    edits: list[tuple] = [(syntax.start, syntax.start + len(syntax.name), "MoveAbsJ")]
     targets = site.targets
     if len(targets) == 2:
-        edits.append((targets[0].span.start, targets[1].span.start, ""))
-    to = targets[-1]
-    edits.append((to.value_span.start, to.value_span.end, name))
+        edits.append((targets[0].argument.start, targets[1].argument.start, ""))
+    value = targets[-1].argument.value
+    edits.append((value.start, value.end, name))
     return edits
+
+
+def _joint_statement(text: str, site: Site, name: str) -> str:
+    """`_statement_variant(_joint_edits(site, name))`, written out for the common case."""
+    syntax = site.motion.syntax
+    start = syntax.start
+    targets = site.targets
+    value = targets[-1].argument.value
+    if len(targets) == 2:
+        head = text[start + len(syntax.name):targets[0].argument.start]
+        head += text[targets[1].argument.start:value.start]
+    else:
+        head = text[start + len(syntax.name):value.start]
+    return f"MoveAbsJ{head}{name}{text[value.end:syntax.end]}"
 
 
 class _Rewriter:
@@ -304,7 +318,7 @@ class _Rewriter:
         if (operand.form == "name" and decl is not None and decl.module == motion.module
                 and (decl.routine is None or decl.routine.lower() == motion.routine.lower())):
             anchor: Any = ("after", id(decl))
-            local = decl.local
+            local = decl.syntax.local
             target: Any = decl
             where = (decl.module, decl.routine)
         else:
@@ -312,12 +326,14 @@ class _Rewriter:
             local = False
             target = next(m for m in self.program.modules if m.name == motion.module)
             where = (motion.module, None)
-        if anchor not in self.decl_blocks:
-            self.decl_blocks[anchor] = []
+        block = self.decl_blocks.get(anchor)
+        if block is None:
+            block = self.decl_blocks[anchor] = []
             self.decl_anchor_order.append((anchor, target))
-        prefix = "LOCAL " if local and not text.startswith("LOCAL") else ""
-        self.decl_blocks[anchor].append(prefix + text)
-        self.units.add_declaration(*where, prefix + text)
+        if local and not text.startswith("LOCAL"):
+            text = "LOCAL " + text
+        block.append(text)
+        self.units.add_declaration(*where, text)
 
     def _replace_statement(self, site: Site, edits: list[tuple]) -> int:
         """Apply local edits to a motion instruction as one whole-statement edit; returns
@@ -325,7 +341,7 @@ class _Rewriter:
         motion = site.motion
         text = _statement_variant(self.program, motion, edits)
         if edits:
-            self.editor.replace(motion.span, text)
+            self.editor.replace((motion.syntax.start, motion.syntax.end), text)
         return self.units.add_statement(motion.module, motion.routine, text)
 
     def _intermediates(self) -> dict[int, tuple[int, int]]:
@@ -372,6 +388,11 @@ class _Rewriter:
                                       format_declaration("CONST", "jointtarget", name, literal))
             return name
 
+        program_text = self.program.text
+        starts: list[int] = []
+        ends: list[int] = []
+        statements: list[str] = []
+        add_statement = self.units.add_statement
         for i, literal in zip(joint_sites, dest_literal):
             site = self.sites[i]
             motion = site.motion
@@ -379,13 +400,14 @@ class _Rewriter:
             name = jointtarget_name(stem, literal, site)
             if i in inter:
                 lo, hi = inter[i]
-                indent = _indent_before(self.program, motion.span.start)
+                indent = _indent_before(self.program, motion.syntax.start)
                 sep = "\n" + indent if indent is not None else " "
-                drops = [(op.span.start, op.span.end, "") for key, op in motion.optional.items()
-                         if key in INTERMEDIATE_DROPS]
+                drops = [(op.argument.start, op.argument.end, "")
+                         for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
                 zone = motion.zone
-                zone_edit = ([(zone.value_span.start, zone.value_span.end, INTERMEDIATE_ZONE)]
-                             if zone is not None and zone.value_span is not None else [])
+                zone_value = zone.argument.value if zone is not None else None
+                zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
+                             if zone_value is not None else [])
                 lines = []
                 for j in range(hi - lo):
                     sub = jointtarget_name(f"{stem}_{j + 1}", literals[inter_start + j], site)
@@ -393,12 +415,17 @@ class _Rewriter:
                     variant = _statement_variant(
                         self.program, motion, _joint_edits(site, sub) + drops + zone_edit)
                     lines.append(variant + sep)
-                    ident = self.units.add_statement(motion.module, motion.routine, variant)
+                    ident = add_statement(motion.module, motion.routine, variant)
                     self.inter_checks.append((ident, segment_of[i], lo + j))
                 inter_start += hi - lo
-                self.editor.insert(motion.span.start, "".join(lines))
-            ident = self._replace_statement(site, _joint_edits(site, name))
+                self.editor.insert(motion.syntax.start, "".join(lines))
+            statement = _joint_statement(program_text, site, name)
+            starts.append(motion.syntax.start)
+            ends.append(motion.syntax.end)
+            statements.append(statement)
+            ident = add_statement(motion.module, motion.routine, statement)
             self.checks.append((ident, 0, site.rows[-1]))
+        self.editor.replace_many(starts, ends, statements)
         self._flush_declarations()
         return self._expected()
 
@@ -455,12 +482,20 @@ class _Rewriter:
             self.checks.extend((ident, slot, row) for slot, row in enumerate(site.rows))
 
     def _flush_declarations(self) -> None:
+        """Insert the queued declarations, in the order their anchors were first used
+        (runs of declarations after declarations go in as one batch)."""
+        after: list[tuple[int, int]] = []
+        after_texts: list[str] = []
         for anchor, target in self.decl_anchor_order:
             text = "\n".join(self.decl_blocks[anchor])
             if anchor[0] == "after":
-                self.editor.insert_declaration_after(target, text)
+                after.append((target.syntax.start, target.syntax.end))
+                after_texts.append(text)
             else:
+                self.editor.insert_lines_after(after, after_texts)
+                after, after_texts = [], []
                 self.editor.insert_declaration(target, text)
+        self.editor.insert_lines_after(after, after_texts)
 
     def _expected(self) -> Expected:
         """Each compensated pose: the check statement and slot it is read from, its

@@ -9,7 +9,11 @@ ending; the result is encoded with the file's encoding and BOM. With no edits,
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+import operator
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
 
 from rapidfix.rapid.program import Declaration, ModuleInfo, MotionInstruction, Program
 from rapidfix.rapid.span import Span
@@ -19,12 +23,14 @@ class EditConflict(ValueError):
     """Two edits touch the same text."""
 
 
-@dataclass(frozen=True)
-class Edit:
+class Edit(NamedTuple):
     start: int
     end: int
-    text: str
+    text: str  # with '\n' line endings; converted to the file's when rendered
     order: int
+
+
+_order_key = operator.itemgetter(0, 1, 3)  # (start, end, order)
 
 
 class Editor:
@@ -40,7 +46,20 @@ class Editor:
         start, end = (span.start, span.end) if isinstance(span, Span) else span
         if not 0 <= start <= end <= len(self.program.text):
             raise ValueError(f"span {start}..{end} is outside the program text")
-        self._edits.append(Edit(start, end, self._newlines(text), len(self._edits)))
+        self._edits.append(Edit(start, end, text, len(self._edits)))
+
+    def replace_many(self, starts: Sequence[int], ends: Sequence[int],
+                     texts: Sequence[str]) -> None:
+        """`replace` for many (start, end) offsets at once, in order."""
+        if not len(starts) == len(ends) == len(texts):
+            raise ValueError("replace_many needs as many starts, ends and texts")
+        if not starts:
+            return
+        size = len(self.program.text)
+        if min(starts) < 0 or max(ends) > size or any(a > b for a, b in zip(starts, ends)):
+            raise ValueError("a span is outside the program text")
+        n = len(self._edits)
+        self._edits.extend(map(Edit, starts, ends, texts, range(n, n + len(starts))))
 
     def insert(self, offset: int, text: str) -> None:
         """Insert `text` at a character offset."""
@@ -56,16 +75,40 @@ class Editor:
         Each new line gets `indent`, by default the indentation of the line
         where `span` starts.
         """
+        self.insert_lines_after([(span.start, span.end)], [text], indent)
+
+    def insert_lines_after(self, anchors: Sequence[tuple[int, int]], texts: Sequence[str],
+                           indent: str | None = None) -> None:
+        """`insert_line_after` for many (start, end) anchors at once, in order (a CAM
+        program gets a new declaration after each of its hundred thousand)."""
+        if not anchors:
+            return
         source = self.program.source
-        if indent is None:
-            line_start = source.line_start(span.start)
-            line = source.text[line_start:span.start]
-            indent = line[: len(line) - len(line.lstrip(" \t"))]
-        end = source.line_end(span.end)
-        body = "".join(f"{indent}{line}\n" if line else "\n" for line in text.split("\n"))
-        if end == len(source.text) and not source.text.endswith("\n"):
-            body = "\n" + body.rstrip("\n")
-        self.insert(end, body)
+        full = source.text
+        size = len(full)
+        source.line_start(0)  # makes the line table
+        starts = np.asarray(source._line_starts)
+        spans = np.asarray(anchors, dtype=np.int64).reshape(-1, 2)
+        first = starts[np.searchsorted(starts, spans[:, 0], side="right") - 1].tolist()
+        index = np.searchsorted(starts, spans[:, 1], side="right")
+        ends = np.where(index < len(starts), starts[np.minimum(index, len(starts) - 1)],
+                        size).tolist()
+        positions: list[int] = []
+        bodies: list[str] = []
+        for line_start, start, end, text in zip(first, spans[:, 0].tolist(), ends, texts):
+            pad = indent
+            if pad is None:
+                line = full[line_start:start]
+                pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if "\n" in text:
+                body = "".join(f"{pad}{part}\n" if part else "\n" for part in text.split("\n"))
+            else:
+                body = f"{pad}{text}\n" if text else "\n"
+            if end == size and not full.endswith("\n"):
+                body = "\n" + body.rstrip("\n")
+            positions.append(end)
+            bodies.append(body)
+        self.replace_many(positions, positions, bodies)
 
     # ------------------------------------------------------------ conveniences
     def replace_statement(self, motion: MotionInstruction, text: str) -> None:
@@ -109,7 +152,7 @@ class Editor:
         return text if self.program.newline == "\n" else text.replace("\n", self.program.newline)
 
     def _ordered(self) -> list[Edit]:
-        edits = sorted(self._edits, key=lambda e: (e.start, e.end, e.order))
+        edits = sorted(self._edits, key=_order_key)
         for before, after in itertools.pairwise(edits):
             if after.start < before.end or (after.start == before.start
                                             and before.end > before.start
@@ -118,15 +161,16 @@ class Editor:
                     f"edits overlap at {self.program.span(after.start, after.end).location}")
         return edits
 
+
     def text(self) -> str:
         """The edited text (decoded)."""
         original = self.program.text
         pieces = []
         position = 0
-        for edit in self._ordered():
-            pieces.append(original[position:edit.start])
-            pieces.append(edit.text)
-            position = edit.end
+        for start, end, text, _order in self._ordered():
+            pieces.append(original[position:start])
+            pieces.append(self._newlines(text) if "\n" in text else text)
+            position = end
         pieces.append(original[position:])
         return "".join(pieces)
 
