@@ -38,7 +38,8 @@ def with_known_history(points: MeasuredPoints) -> MeasuredPoints:
     Before that a joint's last direction of motion is unknown, so the side of its
     backlash is too: a first pose mispredicted by up to half the play would bend a
     fit, and the model cannot tell. Such points (usually only the first) are left out
-    of fitting, for every candidate alike; they are still predicted and scored.
+    of fitting, and of scoring on the validation set, for every candidate alike (the
+    report counts them): no model predicts them without their history.
     """
     known = (last_motion_direction(points.q, points.ctx.q_prev) != 0).all(axis=1)
     if known.all() or known.sum() < len(known) // 2:

@@ -81,11 +81,12 @@ def _check_sizes(table: PointTable, minimum: int, role: str) -> None:
                                "are needed", file=table.path)
 
 
-def _history_note(left_out: int) -> list[str]:
+def _history_note(left_out: int, role: str, what: str) -> list[str]:
     if not left_out:
         return []
-    return [f"{left_out} calibration point(s) at the start of the set, reached before "
-            "every joint had moved, were not fitted: their motion direction is unknown."]
+    return [f"{left_out} {role} point(s) at the start of the set, reached before every joint "
+            f"had moved, were not {what}: their motion direction is unknown, so no model can "
+            "predict a direction-dependent error (backlash) there."]
 
 
 def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: PointTable,
@@ -102,13 +103,15 @@ def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: Po
     _check_sizes(calibration, MIN_CALIBRATION_POINTS, "calibration")
     _check_sizes(validation, MIN_VALIDATION_POINTS, "validation")
     cal = with_known_history(measured_points(calibration, setup))
-    val = measured_points(validation, setup)
+    val = with_known_history(measured_points(validation, setup))
     sigma, source = noise_sigma_mm(model.statistics, setup)
     sel = select(model, robot, cal, val, default_payload_kg=setup.payload_kg,
                  noise_sigma_mm=sigma, candidates=candidates, progress=progress)
     extended = extended_model(model, sel, data_files)
     notes = [f"Fitted on {len(cal)} calibration points only; the {len(val)} validation "
-             "points are only predicted.", *_history_note(len(calibration) - len(cal))]
+             "points are only predicted.",
+             *_history_note(len(calibration) - len(cal), "calibration", "fitted"),
+             *_history_note(len(validation) - len(val), "validation", "scored")]
     report = build_report(sel, robot, cal, val, noise_source=source, title=title, notes=notes)
     return Diagnosis(sel, extended, report, statement(sel), cal, val)
 

@@ -2,13 +2,11 @@
 
 A CAM program has a hundred thousand targets: each jointtarget is formatted
 with one C-level `%` operation and the trailing zeros of the whole block are
-cut by one regular expression, which gives exactly the text
-`rapidfix.rapid.format.format_jointtarget` gives for each.
+cut by a few plain replacements, which gives exactly the text
+`rapidfix.rapid.format.format_jointtarget` gives for each (tests compare them).
 """
 
 from __future__ import annotations
-
-import re
 
 import numpy as np
 
@@ -16,14 +14,20 @@ from rapidfix.kinematics.frames import pose_to_pos_quat
 from rapidfix.rapid.format import format_num, format_robtarget
 
 _JOINTS = "[[" + ",".join(["%.6f"] * 6) + "],"
-_TRAILING = re.compile(r"(\.\d*?)0+(?=[,\]])")
-_EMPTY_FRACTION = re.compile(r"\.(?=[,\]])")
-_NEGATIVE_ZERO = re.compile(r"(?<=[\[,])-0(?=[,\]])")
 
 
 def _trim(text: str) -> str:
-    text = _EMPTY_FRACTION.sub("", _TRAILING.sub(r"\1", text))
-    return _NEGATIVE_ZERO.sub("0", text)
+    """Trailing zeros and dots cut from numbers written with `%.6f`, each followed by
+    ',' or ']'; '-0' written '0'.
+
+    Every number has exactly six decimals, so six passes take every trailing zero of
+    the fractions and none of an integer part (the '.' still stands before it). A
+    '-' stands only at the start of a number, so '-0.000000' is a negative zero.
+    """
+    text = text.replace("-0.000000", "0.000000")
+    for _ in range(6):
+        text = text.replace("0,", ",").replace("0]", "]")
+    return text.replace(".,", ",").replace(".]", "]")
 
 
 def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
@@ -36,6 +40,9 @@ def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
         if text is None:
             text = ext_cache[row] = "[" + ",".join(format_num(v) for v in row) + "]]"
         ext_text.append(text)
+    if q_deg.size and not np.abs(q_deg).max() < 1e8:  # not finite, or written with E
+        joints = ["[[" + ",".join(format_num(v) for v in row) + "]," for row in q_deg.tolist()]
+        return [j + e for j, e in zip(joints, ext_text)]
     joints = [_JOINTS % tuple(row) for row in q_deg.tolist()]
     block = _trim("\n".join(joints)).split("\n") if joints else []
     return [j + e for j, e in zip(block, ext_text)]

@@ -16,6 +16,7 @@ from collections.abc import Iterable
 MAX_IDENTIFIER = 32
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _BAD = re.compile(r"[^A-Za-z0-9_]+")
+_WORD = re.compile(r"[a-z0-9_]*")
 
 
 def identifiers_in(text: str) -> set[str]:
@@ -26,10 +27,31 @@ def identifiers_in(text: str) -> set[str]:
 
 
 class NameAllocator:
-    """Hands out identifiers that collide with nothing already used, case-insensitively."""
+    """Hands out identifiers that collide with nothing already used, case-insensitively.
 
-    def __init__(self, taken: Iterable[str] = ()) -> None:
+    `taken` names are used; so is every identifier in `texts` (program texts). A
+    text is not split into all its words: the names handed out all begin with their
+    prefix, so the first time a prefix is used every word beginning with it is
+    looked up (a plain search; a CAM program holds none).
+    """
+
+    def __init__(self, taken: Iterable[str] = (), texts: Iterable[str] = ()) -> None:
         self._taken = {name.lower() for name in taken}
+        self._texts = [text.lower() for text in texts]
+        self._heads: set[str] = set()
+
+    def _scan(self, head: str) -> None:
+        """Take every word of the texts that begins with `head` (lower case): a superset
+        of the identifiers that do."""
+        if head in self._heads:
+            return
+        self._heads.add(head)
+        taken = self._taken
+        for text in self._texts:
+            pos = text.find(head)
+            while pos >= 0:
+                taken.add(_WORD.match(text, pos).group())
+                pos = text.find(head, pos + 1)
 
     def reserve(self, name: str) -> None:
         """Mark a name as used (it will never be handed out)."""
@@ -37,7 +59,9 @@ class NameAllocator:
 
     def is_free(self, name: str) -> bool:
         """True when `name` is not used yet."""
-        return name.lower() not in self._taken
+        key = name.lower()
+        self._scan(key)
+        return key not in self._taken
 
     def allocate(self, stem: str, prefix: str = "jt_") -> str:
         """A fresh identifier `prefix + stem`, suffixed `_2`, `_3`, … when taken."""
@@ -47,6 +71,9 @@ class NameAllocator:
         if not base[0].isalpha():
             base = "t" + base
         candidate = base[:MAX_IDENTIFIER]
+        # every candidate begins with the prefix (or 't' and the prefix)
+        head = len(prefix) + (0 if base.lower().startswith(prefix.lower()) else 1)
+        self._scan(base[: max(head, 1)].lower())
         counter = 1
         taken = self._taken
         while candidate.lower() in taken:

@@ -38,7 +38,7 @@ from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
 from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
-from rapidfix.postprocess.naming import NameAllocator, identifiers_in
+from rapidfix.postprocess.naming import NameAllocator
 from rapidfix.postprocess.path import Curves, Refinement, refine
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
@@ -206,10 +206,8 @@ class _Rewriter:
         self.robot = comp.robot
         self.model = comp.model
         self.editor = Editor(program)
-        taken = identifiers_in(program.text)
-        for decl_program in comp.decls:
-            taken |= identifiers_in(decl_program.text)
-        self.names = NameAllocator(taken)
+        self.names = NameAllocator(
+            texts=[program.text, *(decl_program.text for decl_program in comp.decls)])
         self.skipped: list[Skipped] = []
         self.decl_blocks: dict[Any, list[str]] = {}
         self.decl_anchor_order: list[Any] = []
@@ -246,15 +244,10 @@ class _Rewriter:
 
     # ------------------------------------------------------------------ paths
     def _start_state(self, motion: MotionInstruction | None) -> tuple | None:
-        """(q_ideal, q_cmd) where the robot is after `motion`, if known before run time."""
+        """(q_ideal, q_cmd) where the robot is after `motion` (not a site), if known before
+        run time."""
         if motion is None:
             return None
-        index = self.site_of.get(id(motion.syntax))
-        if index is not None:
-            if index not in self.mode:
-                return None
-            last = self.sites[index].rows[-1]
-            return self.plan_.q_ideal[last], self.plan_.q_cmd[last]
         if motion.target_kind == "jointtarget" and motion.name.lower() == "moveabsj":
             data = motion.target.data if motion.target is not None else None
             if data is not None and motion.target.static:
@@ -266,27 +259,46 @@ class _Rewriter:
         """Start of every linear/circular move, and intermediate points within the tolerance."""
         if self.options.emit != "jointtargets":
             return
-        self.site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
+        self.site_of = site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
         before = predecessors(self.program)
-        segs, q0i, q0c = [], [], []
-        for i, site in enumerate(self.sites):
-            if self.mode.get(i) != "joint" or site.kind not in "LC":
+        mode, sites = self.mode, self.sites
+        segs: list[int] = []
+        to_rows: list[int] = []
+        via_rows: list[int] = []
+        circular_sites: list[bool] = []
+        start_rows: list[int] = []  # per segment: the row it starts at, or -1 ...
+        absj: dict[int, np.ndarray] = {}  # ... and then the joints of a MoveAbsJ it follows
+        for i, site in enumerate(sites):
+            if site.kind not in "LC" or mode.get(i) != "joint":
                 continue
-            start = self._start_state(before.get(id(site.motion.syntax)))
-            if start is None:
-                self.mode[i] = "filtered"
-                continue
+            previous = before.get(id(site.motion.syntax))
+            index = None if previous is None else site_of.get(id(previous.syntax))
+            if index is not None:
+                if index not in mode:
+                    mode[i] = "filtered"
+                    continue
+                start_rows.append(sites[index].rows[-1])
+            else:
+                start = self._start_state(previous)
+                if start is None:
+                    mode[i] = "filtered"
+                    continue
+                absj[len(segs)] = start[0]
+                start_rows.append(-1)
             segs.append(i)
-            q0i.append(start[0])
-            q0c.append(start[1])
+            to_rows.append(site.rows[-1])
+            via_rows.append(site.rows[0])
+            circular_sites.append(site.kind == "C")
         self.refined_sites = segs
         if not segs:
             return
         t, p = self.targets, self.plan_
-        to_row = np.array([self.sites[i].rows[-1] for i in segs])
-        via_row = np.array([self.sites[i].rows[0] for i in segs])
-        circular = np.array([self.sites[i].kind == "C" for i in segs])
-        q0i, q0c = np.array(q0i), np.array(q0c)
+        to_row, via_row = np.array(to_rows), np.array(via_rows)
+        circular = np.array(circular_sites, dtype=bool)
+        from_row = np.array(start_rows)
+        q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
+        for k, q in absj.items():
+            q0i[k] = q0c[k] = q
         frames = t.placement.take(to_row)
         start_tcp = frames.tcp(self.robot.fk(q0i))
         curves = Curves(start_tcp, t.pose[to_row], t.pose[via_row, :3, 3], circular)

@@ -12,7 +12,6 @@ and the intended TCP is the predicted deviation.
 
 from __future__ import annotations
 
-import bisect
 import re
 from dataclasses import dataclass
 from typing import Any
@@ -138,35 +137,47 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) 
     index_of = [0] * len(order)  # statement id -> its call
     for i, ident in enumerate(order):
         index_of[ident] = i
-    run_starts = [r[0] for r in bulk.runs]
     k = expected.motion.shape[0]
     out = ReadBack.empty(k)
-    positions: dict[str, tuple[tuple[int, ...], str]] = {}
+    call_of_row = np.asarray(index_of)[expected.motion].tolist() if k else []
+    run_of_row = (np.searchsorted([r[0] for r in bulk.runs], call_of_row, side="right") - 1
+                  ).tolist() if k else []
+    # per run of calls: the routine's data, then the module's
+    empty: dict[str, tuple[str, str]] = {}
+    scopes = [(bulk.data.get((module, routine), empty), bulk.data.get((module, None), empty))
+              for _, module, routine in bulk.runs]
+    layouts: dict[str, tuple[tuple[int, ...], str]] = {}
     joint_rows: list[int] = []
     joint_texts: list[str] = []
     rob_values: dict[str, tuple] = {}
-    for i, (m, slot) in enumerate(zip(expected.motion.tolist(), expected.slot.tolist())):
-        c = index_of[m]
-        name = calls[c][0]
-        layout = positions.get(name)
+    for i, (c, run, slot) in enumerate(zip(call_of_row, run_of_row, expected.slot.tolist())):
+        name, first, _rest = calls[c]
+        layout = layouts.get(name)
         if layout is None:
             spec = motion_spec(name)
             if spec is None:
                 raise _NotBulk
-            layout = positions[name] = (
+            layout = layouts[name] = (
                 tuple(spec.parameters.index(p) for p in spec.target_parameters),
                 spec.target_kind)
         where, inline_type = layout
-        required = bulk.arguments(c)[0]
-        if slot >= len(where) or where[slot] >= len(required):
+        if slot >= len(where):
             raise _NotBulk
-        text = required[where[slot]]
+        position = where[slot]
+        if position == 0 and first:
+            text = first
+        else:
+            required = bulk.arguments(c)[0]
+            if position >= len(required):
+                raise _NotBulk
+            text = required[position]
         if text[0] == "[":
             type_name = inline_type
         else:
-            _, module, routine = bulk.runs[bisect.bisect_right(run_starts, c) - 1]
-            found = bulk.lookup(module, routine, text)
-            if found is None or found[1] is None:
+            key = text.lower()
+            local, module_data = scopes[run]
+            found = local.get(key) or module_data.get(key)
+            if found is None or not found[1]:
                 raise _NotBulk
             type_name, text = found
         if type_name == "jointtarget":

@@ -111,6 +111,11 @@ def _patterns() -> dict[str, str]:
 
 
 _BODY_RULE = "_body: (data_decl | _statement)*"
+#: statements in one fast token at most. Python's regular expression engine keeps a
+#: backtracking record per repetition, so one token for a whole CAM program's hundred
+#: thousand statements would hold a few hundred MB and match at half the speed;
+#: a longer run simply becomes several tokens in a row.
+RUN_LIMIT = 256
 
 
 def grammar_extension(grammar: str) -> str:
@@ -122,8 +127,9 @@ def grammar_extension(grammar: str) -> str:
     if _BODY_RULE not in grammar:  # pragma: no cover - guards a change of rapid.lark
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
-    calls = f"{p['call']}(?:{_WS}*{p['call']})*"
-    decls = f"{p['decl']}(?:{_WS}*{p['decl']})*"
+    more = f"{{0,{RUN_LIMIT - 1}}}"
+    calls = f"{p['call']}(?:{_WS}*{p['call']}){more}"
+    decls = f"{p['decl']}(?:{_WS}*{p['decl']}){more}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (

@@ -127,6 +127,7 @@ def test_the_bulk_reader_declines_what_is_not_simple_or_does_not_parse(text):
 
 def test_the_bulk_reader_reads_scopes_and_arguments():
     text = ("MODULE m\nCONST jointtarget j:=[[1,2,3,4,5,6],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+            "CONST jointtarget J:=[[0,0,0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
             "PROC p()\n  LOCAL CONST jointtarget j:=[[6,5,4,3,2,1],[0,0,0,0,0,0]];\n"
             "  MoveAbsJ j\\NoEOffs, v100, fine, tool0 \\WObj:=w;\n"
             "  MoveC\\Conc, c1, [[1,2,3],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]], v5, z1, t;\n"

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from rapidfix.postprocess.header import Header, is_compensated, read_header
-from rapidfix.postprocess.naming import MAX_IDENTIFIER, NameAllocator
+from rapidfix.postprocess.naming import MAX_IDENTIFIER, NameAllocator, identifiers_in
 from rapidfix.postprocess.path import Curves
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.rapid import load_program, parse_program
@@ -32,6 +32,26 @@ def test_allocated_names_are_valid_and_unique(taken, stems):
         assert IDENT.match(name) and len(name) <= MAX_IDENTIFIER
         assert name.lower() not in used
         used.add(name.lower())
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    words=st.lists(st.from_regex(r"[A-Za-z0-9_]{0,12}", fullmatch=True), max_size=20),
+    separators=st.lists(st.sampled_from([" ", "\n", ",", ":=", "(", "9", "_", "!", "é"]),
+                        min_size=20, max_size=20),
+    stems=st.lists(st.sampled_from(["p1", "P1", "x", "p1_2", "a9", "Ⅷ", ""]), min_size=1,
+                   max_size=12),
+    prefix=st.sampled_from(["jt_", "ft_", "JT_", "_", ""]),
+)
+def test_names_avoid_every_identifier_of_the_texts_it_is_given(words, separators, stems, prefix):
+    text = "".join(w + s for w, s in zip(words, separators))
+    names = NameAllocator(texts=[text])
+    used = identifiers_in(text)  # every identifier, the independent way
+    for stem in stems:
+        name = names.allocate(stem, prefix)
+        assert IDENT.match(name) and name.lower() not in used
+        used.add(name.lower())
+    assert not names.is_free(next(iter(used)))
 
 
 def test_names_follow_the_robtarget_and_avoid_collisions():
@@ -268,3 +288,23 @@ def test_motion_targets_shortcut_matches_the_program_model(samples):
             assert motion_targets(motion) == motion.targets
             count += 1
     assert count > 50
+
+
+joint_values = st.one_of(
+    st.floats(-400, 400, allow_nan=False),
+    st.sampled_from([0.0, -0.0, -4e-7, 4e-7, -5e-7, 5e-7, 1e-6, -1e-6, 10.0, -100.0, 12.5,
+                     0.0000105, 359.9999996, -179.9999995, 1e8, -3e9]),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(*[joint_values] * 6), min_size=1, max_size=8),
+       st.sampled_from([9e9, 0.0, -12.25]))
+def test_jointtarget_literals_are_what_format_jointtarget_writes(rows, ext):
+    from rapidfix.postprocess.literals import jointtarget_literals
+    from rapidfix.rapid.format import format_jointtarget
+
+    q = np.array(rows)
+    extax = np.full((len(rows), 6), ext)
+    got = jointtarget_literals(q, extax)
+    assert got == [format_jointtarget(r, e) for r, e in zip(q.tolist(), extax.tolist())]
