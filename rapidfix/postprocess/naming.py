@@ -68,17 +68,21 @@ class NameAllocator:
         # an identifier-shaped stem (the usual case) needs no cleaning
         clean = stem if stem.isascii() and stem.isidentifier() else _BAD.sub("_", stem)
         base = prefix + (clean.strip("_") or "target")
+        head = len(prefix)  # every candidate begins with the prefix (or 't' and the prefix)
         if not base[0].isalpha():
             base = "t" + base
+            head += 1
+        head_key = base[: min(max(head, 1), 16)].lower()  # kept by every truncated candidate
+        if head_key not in self._heads:
+            self._scan(head_key)
         candidate = base[:MAX_IDENTIFIER]
-        # every candidate begins with the prefix (or 't' and the prefix)
-        head = len(prefix) + (0 if base.lower().startswith(prefix.lower()) else 1)
-        self._scan(base[: max(head, 1)].lower())
-        counter = 1
+        key = candidate.lower()
         taken = self._taken
-        while candidate.lower() in taken:
+        counter = 1
+        while key in taken:
             counter += 1
             suffix = f"_{counter}"
             candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
-        taken.add(candidate.lower())
+            key = candidate.lower()
+        taken.add(key)
         return candidate

@@ -27,7 +27,7 @@ MOVEABSJ_OPTIONS = frozenset({"conc", "id", "noeoffs", "v", "t", "z", "inpos", "
 _UNDECLARED = "is not declared in this file"
 
 
-@dataclass
+@dataclass(slots=True)
 class Site:
     """One motion instruction and what the post-processor does with it.
 
@@ -276,8 +276,10 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         if isinstance(found, str):
             site.reason = found
             continue
-        key = (_operand_key(motion.tool), _operand_key(motion.wobj),
-               _operand_key(motion.optional.get("tload")))
+        optional = motion.optional
+        key = (_operand_key(motion.arguments.get("tool")),
+               _operand_key(optional.get("wobj") if optional else None),
+               _operand_key(optional.get("tload") if optional else None))
         known = frame_sets.get(key)
         if known is None:
             known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
@@ -286,7 +288,7 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
             site.reason = used
             continue
         first = len(values)
-        site.rows = list(range(first, first + len(found)))
+        site.rows = [first] if len(found) == 1 else list(range(first, first + len(found)))
         values.extend(found)
         operands.extend(site_ops)
         blocks.append((len(sites) - 1, len(found), index))

@@ -297,10 +297,13 @@ class _Rewriter:
         circular = np.array(circular_sites, dtype=bool)
         from_row = np.array(start_rows)
         q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
-        for k, q in absj.items():
-            q0i[k] = q0c[k] = q
+        start_flange = p.flange[from_row]  # the previous target's intended tool0 pose
+        if absj:
+            at = np.fromiter(absj, dtype=int, count=len(absj))
+            q0i[at] = q0c[at] = np.array(list(absj.values()))
+            start_flange[at] = self.robot.fk(q0i[at])
         frames = t.placement.take(to_row)
-        start_tcp = frames.tcp(self.robot.fk(q0i))
+        start_tcp = frames.tcp(start_flange)
         curves = Curves(start_tcp, t.pose[to_row], t.pose[via_row, :3, 3], circular)
         payload = t.payload_kg[to_row]
 
@@ -327,14 +330,14 @@ class _Rewriter:
         motion = site.motion
         operand = site.targets[slot]
         decl = operand.declaration
-        if (operand.form == "name" and decl is not None and decl.module == motion.module
+        if (decl is not None and operand.form == "name" and decl.module == motion.module
                 and (decl.routine is None or decl.routine.lower() == motion.routine.lower())):
-            anchor: Any = ("after", id(decl))
+            anchor: Any = id(decl)  # after the declaration
             local = decl.syntax.local
             target: Any = decl
             where = (decl.module, decl.routine)
         else:
-            anchor = ("module", motion.module.lower())
+            anchor = motion.module.lower()  # among the module's declarations
             local = False
             target = next(m for m in self.program.modules if m.name == motion.module)
             where = (motion.module, None)
@@ -390,14 +393,16 @@ class _Rewriter:
         self._filtered(filtered_sites)
 
         jt_names: dict[tuple[str, str], str] = {}
+        allocate, add_declaration = self.names.allocate, self._add_declaration
 
         def jointtarget_name(stem: str, literal: str, site: Site) -> str:
             key = (stem.lower(), literal)
             name = jt_names.get(key)
             if name is None:
-                name = jt_names[key] = self.names.allocate(stem, "jt_")
-                self._add_declaration(site, len(site.targets) - 1,
-                                      format_declaration("CONST", "jointtarget", name, literal))
+                name = jt_names[key] = allocate(stem, "jt_")
+                # format_declaration("CONST", "jointtarget", name, literal), written out
+                add_declaration(site, len(site.targets) - 1,
+                                f"CONST jointtarget {name}:={literal};")
             return name
 
         program_text = self.program.text
@@ -500,7 +505,7 @@ class _Rewriter:
         after_texts: list[str] = []
         for anchor, target in self.decl_anchor_order:
             text = "\n".join(self.decl_blocks[anchor])
-            if anchor[0] == "after":
+            if type(anchor) is int:
                 after.append((target.syntax.start, target.syntax.end))
                 after_texts.append(text)
             else:

@@ -308,3 +308,33 @@ def test_jointtarget_literals_are_what_format_jointtarget_writes(rows, ext):
     extax = np.full((len(rows), 6), ext)
     got = jointtarget_literals(q, extax)
     assert got == [format_jointtarget(r, e) for r, e in zip(q.tolist(), extax.tolist())]
+
+
+def test_each_move_gets_its_own_work_object_and_load_with_the_same_tool():
+    from rapidfix.postprocess.resolve import Declarations, resolve
+
+    extax = ",".join(["9E+09"] * 6)
+    target = f"[[10,20,30],[0,0.258819045,0.965925826,0],[0,0,0,0],[{extax}]]"
+    text = f"""MODULE Frames
+  PERS tooldata tBar:=[TRUE,[[0,0,100],[1,0,0,0]],[1.2,[0,0,60],[1,0,0,0],0,0,0]];
+  PERS wobjdata wA:=[FALSE,TRUE,"",[[850,80,450],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  PERS wobjdata wB:=[FALSE,TRUE,"",[[700,-80,400],[0.923879533,0,-0.382683432,0]],
+                     [[5,0,0],[1,0,0,0]]];
+  PERS loaddata heavy:=[7.5,[0,0,50],[1,0,0,0],0,0,0];
+  CONST robtarget p1:={target};
+  PROC main()
+    MoveJ p1, v100, fine, tBar\\WObj:=wA;
+    MoveJ p1, v100, fine, tBar\\WObj:=wB;
+    MoveJ p1, v100, fine, tBar;
+    MoveJ p1, v100, fine, tBar\\WObj:=wB\\TLoad:=heavy;
+  ENDPROC
+ENDMODULE
+"""
+    sites, t = resolve(parse_program(text), Declarations([]), "jointtargets")
+    assert [s.reason for s in sites] == [None] * 4
+    wa = _frame([850, 80, 450], [1, 0, 0, 0])
+    wb = _frame([700, -80, 400], [0.923879533, 0, -0.382683432, 0]) @ _frame([5, 0, 0],
+                                                                           [1, 0, 0, 0])
+    for row, wobj in enumerate([wa, wb, np.eye(4), wb]):
+        assert np.allclose(t.placement.wobj[row], wobj, atol=1e-9)
+    assert t.payload_kg.tolist() == [1.2, 1.2, 1.2, 7.5]
