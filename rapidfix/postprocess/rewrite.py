@@ -228,13 +228,12 @@ class _Rewriter:
         t = self.targets
         ctx = Context(payload_kg=t.payload_kg)
         self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement, ctx)
-        for site in self.sites:
+        # rows are in site order: the first failed row of each site names its reason
+        for row in np.flatnonzero(~self.plan_.ok).tolist():
+            site = self.sites[int(t.site[row])]
             if site.reason is None:
-                bad = [r for r in site.rows if not self.plan_.ok[r]]
-                if bad:
-                    row = bad[0]
-                    label = operand_label(site.targets, t.operand[row])
-                    site.reason = label + self.plan_.reason[row]
+                label = operand_label(site.targets, t.operand[row])
+                site.reason = label + self.plan_.reason[row]
         # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
         self.mode: dict[int, str] = {}
         for i, site in enumerate(self.sites):

@@ -146,6 +146,10 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) 
     empty: dict[str, tuple[str, str]] = {}
     scopes = [(bulk.data.get((module, routine), empty), bulk.data.get((module, None), empty))
               for _, module, routine in bulk.runs]
+    if k and len(set(map(id, (d for pair in scopes for d in pair)))) <= 2:
+        quick = _jointtargets_named_first(bulk, call_of_row, expected, scopes[0])
+        if quick is not None:
+            return quick
     layouts: dict[str, tuple[tuple[int, ...], str]] = {}
     joint_rows: list[int] = []
     joint_texts: list[str] = []
@@ -193,6 +197,32 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) 
     if joint_rows:
         out.joint[joint_rows] = True
         out.robax[joint_rows] = _joint_values(joint_texts)
+    return out
+
+
+def _jointtargets_named_first(bulk: BulkProgram, call_of_row: list[int], expected: Expected,
+                              scope: tuple[dict, dict]) -> ReadBack | None:
+    """The usual case at list speed: every checked pose is a jointtarget data name written
+    as the first argument of a call whose first parameter is its target, all calls in one
+    scope. None when that is not so (the general loop decides)."""
+    calls = bulk.calls
+    rows = [calls[c] for c in call_of_row]
+    if expected.slot.any() or not all(first for _, first, _ in rows):
+        return None
+    for name in {name for name, _, _ in rows}:
+        spec = motion_spec(name)
+        if spec is None or spec.target_kind != "jointtarget" or not spec.target_parameters \
+                or spec.parameters.index(spec.target_parameters[0]) != 0:
+            return None
+    local, module_data = scope
+    names = {**module_data, **local}  # routine data first, then the module's
+    found = list(map(names.get, [first.lower() for _, first, _ in rows]))
+    if None in found or any(type_name != "jointtarget" or not text
+                            for type_name, text in found):
+        return None
+    out = ReadBack.empty(len(rows))
+    out.joint[:] = True
+    out.robax[:] = _joint_values([text for _, text in found])
     return out
 
 
