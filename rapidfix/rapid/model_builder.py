@@ -380,20 +380,24 @@ class ModelBuilder:
         layouts: dict[tuple[str, str, str], tuple[tuple[str, str | None, dict], ...]] = {}
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
+        last: tuple = (None, None, None)  # consecutive moves mostly share these
         for call, spec, module, routine, in_loop in self.pending:
-            rkey = routine.lower()
-            roles = layouts.get((spec.name, module, rkey))
-            if roles is None:
-                roles = layouts[(spec.name, module, rkey)] = tuple(
-                    (key, role_types.get(key),
-                     caches.setdefault((module, rkey, role_types.get(key)), {}))
-                    for key in (p.lower() for p in spec.parameters))
+            if spec is not last[0] or routine is not last[1] or module is not last[2]:
+                rkey = routine.lower()
+                roles = layouts.get((spec.name, module, rkey))
+                if roles is None:
+                    roles = layouts[(spec.name, module, rkey)] = tuple(
+                        (key, role_types.get(key),
+                         caches.setdefault((module, rkey, role_types.get(key)), {}))
+                        for key in (p.lower() for p in spec.parameters))
+                last = (spec, routine, module)
+                n_roles = len(roles)
             arguments: dict[str, Operand] = {}
             optional: dict[str, Operand] = {}
             index = 0
             for arg in call.args:
                 if arg.kind == "required":
-                    if arg.name is None and index < len(roles):
+                    if arg.name is None and index < n_roles:
                         key, hint, cache = roles[index]
                     else:
                         key = arg.name.lower() if arg.name is not None else f"#{index + 1}"
