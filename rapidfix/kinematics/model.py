@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rapidfix.exceptions import KinematicsError
-from rapidfix.kinematics.screws import forward_pose, product_of_exponentials, screw_rows
+from rapidfix.kinematics.screws import current_axes, forward_pose, screw_rows
 
 if TYPE_CHECKING:
     from rapidfix.kinematics.frames import Tool, WorkObject
@@ -121,10 +121,7 @@ class RobotModel:
     def joint_frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Current axis directions (N, 6, 3) and points on the axes (N, 6, 3) mm."""
         qb, single = as_joint_batch(q)
-        _, prefix = product_of_exponentials(self.axis_dirs, self.axis_points, self.home, qb)
-        R, p = prefix[..., :3, :3], prefix[..., :3, 3]
-        dirs = np.einsum("nkij,kj->nki", R, self.axis_dirs)
-        points = np.einsum("nkij,kj->nki", R, self.axis_points) + p
+        dirs, points = current_axes(self.axis_dirs, self.axis_points, qb)
         return (dirs[0], points[0]) if single else (dirs, points)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:

@@ -105,14 +105,35 @@ def forward_pose(
     return out
 
 
+def current_axes(
+    axis_dirs: np.ndarray, axis_points: np.ndarray, q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Current axis directions and points (N, n, 3) of the joints for joints q (N, n):
+    each home axis carried by the product of the joints before it."""
+    q = np.asarray(q, dtype=float)
+    count, n = q.shape[0], axis_dirs.shape[0]
+    dirs = np.empty((count, n, 3))
+    points = np.empty((count, n, 3))
+    for start in range(0, count, CHUNK):
+        rows = slice(start, start + CHUNK)
+        _chain(axis_dirs, axis_points, q[rows], None, (dirs[rows], points[rows]))
+    return dirs, points
+
+
 def _chain(
-    axis_dirs: np.ndarray, axis_points: np.ndarray, q: np.ndarray, prefix: np.ndarray | None
+    axis_dirs: np.ndarray, axis_points: np.ndarray, q: np.ndarray, prefix: np.ndarray | None,
+    axes: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
-    """e^[S1]θ1 … e^[Sn]θn (K, 4, 4) for one chunk, storing the prefixes when asked."""
+    """e^[S1]θ1 … e^[Sn]θn (K, 4, 4) for one chunk, storing the prefixes (or only the
+    current axis directions and points) when asked."""
     current = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
     for i in range(axis_dirs.shape[0]):  # loop over the joints, not over poses
         if prefix is not None:
             prefix[:, i] = current
+        if axes is not None:
+            rot = current[:, :3, :3]
+            axes[0][:, i] = rot @ axis_dirs[i]
+            axes[1][:, i] = rot @ axis_points[i] + current[:, :3, 3]
         current = current @ revolute_exp(axis_dirs[i], axis_points[i], q[:, i])
     return current
 

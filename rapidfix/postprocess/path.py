@@ -32,6 +32,9 @@ SCREEN = 0.1
 SCREEN_FRACTIONS = np.array([1.0 / 3.0, 2.0 / 3.0])
 MAX_ROUNDS = 8
 MAX_SPLIT = 64
+#: factor on the curvature bound of a joint-linear move for what the error model adds
+#: (joint-error slopes and bends, link and compliance errors: a few % in practice)
+BOUND_SAFETY = 2.0
 #: joint vectors per call of the error model's prediction: its temporaries (poses ×
 #: basis functions) then stay in the cache, several times faster on a CAM program
 PREDICT_CHUNK = 4096
@@ -141,6 +144,44 @@ class Refinement:
     failed: np.ndarray
 
 
+def chain_span(axis_points: np.ndarray) -> float:
+    """An upper bound (mm) of the distance of any joint-axis point from the base origin,
+    whatever the joints: |c1| plus the distances between consecutive axis points (each
+    pair is fixed in one link)."""
+    points = np.asarray(axis_points, dtype=float)
+    return float(np.linalg.norm(points[0]) + np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def line_deviation_bound(span_mm: float, p0: np.ndarray, p1: np.ndarray, dq: np.ndarray,
+                         axes0: tuple[np.ndarray, np.ndarray],
+                         axes1: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """Upper bound (M,) mm of how far a joint-linear move strays from its chord.
+
+    On q(s) = q0 + s·Δq a revolute chain moves a point p with
+    p'' = Σᵢⱼ ΔqᵢΔqⱼ ∂²p/∂qᵢ∂qⱼ, and |∂²p/∂qᵢ∂qⱼ| ≤ 2·r_k, r_k the distance of p
+    from the more distal axis k = max(i, j); a curve with |p''| ≤ M stays within M/8
+    of its chord. So the wrist's large turns count with the wrist's short lever. r_k
+    is taken at both ends, plus what it can change on the way (2·Σ|Δq|·(|p| + the
+    chain's span)). p0, p1 (M,3): the carried point at the ends, base frame; Δq (M,6)
+    rad; axes0/axes1: (directions, points) (M,6,3) of the axes at the ends. What the
+    error model adds is covered by BOUND_SAFETY (tests check the bound against the
+    sampled prediction). A CAM program's 0.5 mm steps come out near 10⁻³ mm.
+    """
+    def lever(p: np.ndarray, axes: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        dirs, points = axes
+        rel = p[:, None, :] - points
+        along = np.sum(rel * dirs, axis=2, keepdims=True)
+        return np.linalg.norm(rel - along * dirs, axis=2)
+
+    w = np.abs(dq)
+    turn = w.sum(axis=1)
+    reach = np.maximum(np.linalg.norm(p0, axis=1), np.linalg.norm(p1, axis=1)) + span_mm
+    r = np.maximum(lever(p0, axes0), lever(p1, axes1)) + (2.0 * turn * reach)[:, None]
+    before = np.cumsum(w, axis=1) - w  # Σ of the more proximal joints' turns
+    m = np.sum(r * w * (w + 2.0 * before), axis=1)  # Σᵢⱼ wᵢwⱼ r_max(i,j)
+    return BOUND_SAFETY * 2.0 * m / 8.0
+
+
 def _sampled(curves: Curves, seg: np.ndarray, qc0: np.ndarray, qc1: np.ndarray,
              predict: Predict, f: np.ndarray) -> np.ndarray:
     k, nf = seg.shape[0], f.shape[0]
@@ -180,11 +221,14 @@ def interval_deviation(
 
 def refine(
     curves: Curves, q_ideal: tuple[np.ndarray, np.ndarray], q_cmd: tuple[np.ndarray, np.ndarray],
-    tolerance: float, predict: Predict, solve: Solve,
+    tolerance: float, predict: Predict, solve: Solve, bound: np.ndarray | None = None,
 ) -> Refinement:
     """Intermediate points that keep every segment within `tolerance` mm of its curve.
 
-    q_ideal, q_cmd: (start (M,6), end (M,6)) joints at the segment ends.
+    q_ideal, q_cmd: (start (M,6), end (M,6)) joints at the segment ends. `bound` (M,)
+    an upper bound of each segment's deviation where one is known (inf elsewhere):
+    segments it keeps below SCREEN × tolerance are not sampled, and the bound stands
+    as their deviation.
     """
     m = curves.start.shape[0]
     seg = np.arange(m)
@@ -195,6 +239,11 @@ def refine(
     deviation = np.zeros(m)
     out_seg, out_s, out_qi, out_qc = [], [], [], []
     target = MARGIN * tolerance
+    if bound is not None:
+        settled = np.asarray(bound, dtype=float) <= SCREEN * tolerance
+        deviation[settled] = np.asarray(bound, dtype=float)[settled]
+        keep = ~settled
+        seg, s0, s1, qi0, qi1, qc0, qc1 = (x[keep] for x in (seg, s0, s1, qi0, qi1, qc0, qc1))
     for _ in range(MAX_ROUNDS):
         if seg.size == 0:
             break
