@@ -192,16 +192,33 @@ _CONVERTERS = {
 }
 
 
+# Robtargets of a CAM program share their orientation, confdata and external-axes
+# tuples (rapidfix.rapid.fastpath reads them once): a verdict on such a shared rest is
+# kept, with the tuples themselves so that their ids cannot be reused.
+_REST_FITS: dict[int, tuple] = {}
+
+
 def _robtarget_fits(value: Value) -> bool:
     if type(value) is not tuple or len(value) != 4:
         return False
     trans, rot, conf, extax = value
-    if not type(trans) is type(rot) is type(conf) is type(extax) is tuple:
+    if type(trans) is not tuple or len(trans) != 3 \
+            or not all(map(isinstance, trans, repeat(float))):
         return False
-    if (len(trans), len(rot), len(conf), len(extax)) != (3, 4, 4, 6):
+    known = _REST_FITS.get(id(rot))
+    if known is not None and known[0] is rot and known[1] is conf and known[2] is extax:
+        return True
+    if not type(rot) is type(conf) is type(extax) is tuple:
         return False
-    return (all(map(isinstance, trans + rot + conf + extax, repeat(float)))
+    if (len(rot), len(conf), len(extax)) != (4, 4, 6):
+        return False
+    fits = (all(map(isinstance, rot + conf + extax, repeat(float)))
             and all(map(math.isfinite, conf)))
+    if fits:
+        if len(_REST_FITS) >= 256:
+            _REST_FITS.clear()
+        _REST_FITS[id(rot)] = (rot, conf, extax)
+    return fits
 
 
 def _jointtarget_fits(value: Value) -> bool:

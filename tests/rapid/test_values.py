@@ -84,3 +84,14 @@ def test_confdata_that_is_not_a_whole_number_is_a_shape_error(conf):
     assert not fits_type("robtarget", value)
     with pytest.raises(ValueShapeError, match="confdata"):
         typed_value("robtarget", value)
+
+
+def test_a_shared_rest_is_judged_once_and_each_position_still_checked():
+    rot, conf, extax = (1.0, 0.0, 0.0, 0.0), (0.0, -1.0, 2.0, 0.0), (9e9,) * 6
+    assert fits_type("robtarget", ((1.0, 2.0, 3.0), rot, conf, extax))
+    assert fits_type("robtarget", ((4.0, 5.0, 6.0), rot, conf, extax))  # the kept verdict
+    assert not fits_type("robtarget", ((4.0, 5.0), rot, conf, extax))
+    assert not fits_type("robtarget", ((4.0, 5.0, "x"), rot, conf, extax))
+    # the same orientation tuple with other confdata is judged on its own
+    assert not fits_type("robtarget", ((1.0, 2.0, 3.0), rot, (0.0, math.nan, 0.0, 0.0), extax))
+    assert not fits_type("robtarget", ((1.0, 2.0, 3.0), rot, conf, (9e9,) * 5))
