@@ -63,6 +63,23 @@ class NameAllocator:
         self._scan(key)
         return key not in self._taken
 
+    def allocate_many(self, stems: list[str], prefix: str = "jt_") -> list[str]:
+        """`allocate` for each stem in turn, at list speed in the usual case (every stem a
+        plain identifier, every name new and distinct), one by one otherwise."""
+        simple = (prefix[:1].isalpha() and prefix.isascii()
+                  and all(s.isascii() and s.isidentifier() and s[0] != "_" and s[-1] != "_"
+                          and len(s) + len(prefix) <= MAX_IDENTIFIER for s in stems))
+        if simple and stems:
+            head = prefix[:16].lower()
+            if head not in self._heads:
+                self._scan(head)
+            names = [prefix + s for s in stems]
+            keys = [name.lower() for name in names]
+            if len(set(keys)) == len(keys) and self._taken.isdisjoint(keys):
+                self._taken.update(keys)
+                return names
+        return [self.allocate(s, prefix) for s in stems]
+
     def allocate(self, stem: str, prefix: str = "jt_") -> str:
         """A fresh identifier `prefix + stem`, suffixed `_2`, `_3`, … when taken."""
         # an identifier-shaped stem (the usual case) needs no cleaning

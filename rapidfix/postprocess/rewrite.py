@@ -435,6 +435,10 @@ class _Rewriter:
                                 f"CONST jointtarget {name}:={literal};")
             return name
 
+        if not inter:
+            self._emit_joints(joint_sites, dest_literal)
+            self._flush_declarations()
+            return self._expected()
         program_text = self.program.text
         starts: list[int] = []
         ends: list[int] = []
@@ -475,6 +479,35 @@ class _Rewriter:
         self.editor.replace_many(starts, ends, statements)
         self._flush_declarations()
         return self._expected()
+
+    def _emit_joints(self, joint_sites: list[int], literals: list[str]) -> None:
+        """`emit`'s loop for moves without intermediate points (a CAM program), in phases
+        over all moves: the same names, declarations and statements."""
+        sites = [self.sites[i] for i in joint_sites]
+        stems = [_stem(site, len(site.targets) - 1) for site in sites]
+        keys = list(zip(map(str.lower, stems), literals))
+        first: dict[tuple[str, str], int] = {}
+        for n, key in enumerate(keys):
+            first.setdefault(key, n)
+        order = list(first.values())
+        names = self.names.allocate_many([stems[n] for n in order], "jt_")
+        name_of = dict(zip(first, names))
+        add_declaration = self._add_declaration
+        for n, name in zip(order, names):
+            site = sites[n]
+            # format_declaration("CONST", "jointtarget", name, literal), written out
+            add_declaration(site, len(site.targets) - 1,
+                            f"CONST jointtarget {name}:={literals[n]};")
+        text = self.program.text
+        statements = [_joint_statement(text, site, name_of[key])
+                      for site, key in zip(sites, keys)]
+        self.editor.replace_many([site.motion.syntax.start for site in sites],
+                                 [site.motion.syntax.end for site in sites], statements)
+        add_statement, checks = self.units.add_statement, self.checks
+        for site, statement in zip(sites, statements):
+            motion = site.motion
+            checks.append((add_statement(motion.module, motion.routine, statement), 0,
+                           site.rows[-1]))
 
     def _filtered(self, filtered_sites: list[int]) -> None:
         """Filtered robtargets: in the declaration when only compensated moves use it,

@@ -154,3 +154,22 @@ def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, com
     with pytest.raises(RapidSemanticError, match="does not parse"):
         rewrite_file(source, out, comp, RewriteOptions())
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+class _NoPointsButTheLoop(dict):
+    """No intermediate points, yet truthy: the rewrite takes its move-by-move loop."""
+
+    def __bool__(self):
+        return True
+
+
+@pytest.mark.parametrize("name", [*PROGRAMS, "cam"])
+def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypatch, comp, name):
+    data = cam_program(200).encode() if name == "cam" else (SAMPLES / name).read_bytes()
+    phased = rewrite_source(data, name, comp, RewriteOptions())
+    monkeypatch.setattr(rewrite_module._Rewriter, "_intermediates",
+                        lambda self: _NoPointsButTheLoop())
+    looped = rewrite_source(data, name, comp, RewriteOptions())
+    if phased.points_added == 0:
+        assert phased.data == looped.data
+    assert looped.moves_compensated == phased.moves_compensated

@@ -377,3 +377,18 @@ def test_the_line_bound_holds_for_joint_moves_the_model_predicts(comp, step_deg)
     assert np.median(bound / np.maximum(truth, 1e-12)) < 1000
     if step_deg <= 0.02:
         assert bound.max() < 0.01
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    taken=st.lists(st.sampled_from(["jt_p1", "JT_P2", "jt_p1_2", "x", "jt_"]), max_size=4),
+    stems=st.lists(st.sampled_from(["p1", "P1", "p2", "p3", "_p4", "a" * 31, "b c", "9"]),
+                   max_size=8),
+    prefix=st.sampled_from(["jt_", "ft_", "_"]),
+)
+def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, stems, prefix):
+    text = " ".join(taken)
+    one = NameAllocator(texts=[text])
+    many = NameAllocator(texts=[text])
+    assert many.allocate_many(stems, prefix) == [one.allocate(s, prefix) for s in stems]
+    assert many.allocate("p1", prefix) == one.allocate("p1", prefix)
