@@ -48,6 +48,10 @@ def as_pose_batch(T: np.ndarray) -> tuple[np.ndarray, bool]:
     return arr, single
 
 
+#: poses per chunk of `RobotModel.ik_conf` on large batches
+IK_CHUNK = 8192
+
+
 class RobotModel:
     """Six revolute screws (axis directions and points, mm) and tool0's home pose.
 
@@ -193,7 +197,17 @@ class RobotModel:
         """
         from rapidfix.kinematics.confdata import select_by_conf
 
-        return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
+        T = np.asarray(T, dtype=float)
+        if ik_options or T.ndim != 3 or T.shape[0] <= IK_CHUNK:
+            return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
+        # in chunks: the (poses × 8 branches) temporaries then stay small and are reused
+        conf = np.broadcast_to(np.asarray(conf, dtype=int), (T.shape[0], 4))
+        q = np.empty((T.shape[0], 6))
+        status = np.empty(T.shape[0], dtype=np.int8)
+        for start in range(0, T.shape[0], IK_CHUNK):
+            rows = slice(start, start + IK_CHUNK)
+            q[rows], status[rows] = select_by_conf(self, self.ik(T[rows]), conf[rows])
+        return q, status
 
     def ik_nearest(
         self, T: np.ndarray, q_prev: np.ndarray, **ik_options: object

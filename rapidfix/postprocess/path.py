@@ -152,31 +152,61 @@ def chain_span(axis_points: np.ndarray) -> float:
     return float(np.linalg.norm(points[0]) + np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
-def line_deviation_bound(span_mm: float, p0: np.ndarray, p1: np.ndarray, dq: np.ndarray,
-                         axes0: tuple[np.ndarray, np.ndarray],
-                         axes1: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+def wrist_levers(axis_dirs: np.ndarray, axis_points: np.ndarray,
+                 home: np.ndarray) -> tuple[np.ndarray, float]:
+    """(point on axis 6 in the flange frame, its distance from axes 4 and 5 at most):
+    with a spherical wrist, axes 4 and 5 pass within that distance of the point, so a
+    carried point's lever about any wrist axis is at most its distance from it plus
+    that much, whatever the joints."""
+    dirs = np.asarray(axis_dirs, dtype=float)
+    points = np.asarray(axis_points, dtype=float)
+    w6 = dirs[5] / np.linalg.norm(dirs[5])
+    # where axes 4 and 5 meet (the wrist centre), and its foot on axis 6
+    a, b = points[3], points[4]
+    d4, d5 = dirs[3] / np.linalg.norm(dirs[3]), dirs[4] / np.linalg.norm(dirs[4])
+    n = np.cross(d4, d5)
+    t = np.dot(np.cross(b - a, d5), n) / max(np.dot(n, n), 1e-300)
+    centre = a + t * d4
+    foot = points[5] + np.dot(centre - points[5], w6) * w6
+    gap = float(np.linalg.norm(centre - foot) + np.linalg.norm(np.cross(centre - a, d4))
+                + np.linalg.norm(np.cross(centre - b, d5)))
+    home = np.asarray(home, dtype=float)
+    return home[:3, :3].T @ (foot - home[:3, 3]), gap
+
+
+def line_deviation_bound(span_mm: float, wrist: tuple[np.ndarray, float],
+                         flange0: np.ndarray, flange1: np.ndarray, point: np.ndarray,
+                         dq: np.ndarray) -> np.ndarray:
     """Upper bound (M,) mm of how far a joint-linear move strays from its chord.
 
     On q(s) = q0 + s·Δq a revolute chain moves a point p with
     p'' = Σᵢⱼ ΔqᵢΔqⱼ ∂²p/∂qᵢ∂qⱼ, and |∂²p/∂qᵢ∂qⱼ| ≤ 2·r_k, r_k the distance of p
     from the more distal axis k = max(i, j); a curve with |p''| ≤ M stays within M/8
-    of its chord. So the wrist's large turns count with the wrist's short lever. r_k
-    is taken at both ends, plus what it can change on the way (2·Σ|Δq|·(|p| + the
-    chain's span)). p0, p1 (M,3): the carried point at the ends, base frame; Δq (M,6)
-    rad; axes0/axes1: (directions, points) (M,6,3) of the axes at the ends. What the
-    error model adds is covered by BOUND_SAFETY (tests check the bound against the
-    sampled prediction). A CAM program's 0.5 mm steps come out near 10⁻³ mm.
+    of its chord. r_k is at most |p| plus the chain's span for the arm's axes, and
+    for the wrist's at most p's distance from axis 6 (`wrist_levers`), so the
+    wrist's large turns count with the wrist's short lever. Both are taken at the
+    ends plus what they can change on the way (2·Σ|Δq|·(|p| + span)).
+    flange0, flange1 (M,4,4): the flange at the ends; point (M,3) the carried point
+    in the flange frame; Δq (M,6) rad. What the error model adds is covered by
+    BOUND_SAFETY (tests check the bound against the sampled prediction). A CAM
+    program's 0.5 mm steps come out near 10⁻³ mm: they need no sampling.
     """
-    def lever(p: np.ndarray, axes: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-        dirs, points = axes
-        rel = p[:, None, :] - points
-        along = np.sum(rel * dirs, axis=2, keepdims=True)
-        return np.linalg.norm(rel - along * dirs, axis=2)
+    foot, gap = wrist
 
+    def ends(flange: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rot, pos = flange[:, :3, :3], flange[:, :3, 3]
+        p = np.einsum("nij,nj->ni", rot, point) + pos
+        return np.linalg.norm(p, axis=1), np.linalg.norm(p - (rot @ foot + pos), axis=1)
+
+    reach0, wrist0 = ends(flange0)
+    reach1, wrist1 = ends(flange1)
     w = np.abs(dq)
     turn = w.sum(axis=1)
-    reach = np.maximum(np.linalg.norm(p0, axis=1), np.linalg.norm(p1, axis=1)) + span_mm
-    r = np.maximum(lever(p0, axes0), lever(p1, axes1)) + (2.0 * turn * reach)[:, None]
+    reach = np.maximum(reach0, reach1) + span_mm
+    grow = 2.0 * turn * reach
+    r = np.empty_like(w)
+    r[:, :3] = (reach + grow)[:, None]
+    r[:, 3:] = (np.maximum(wrist0, wrist1) + gap + grow)[:, None]
     before = np.cumsum(w, axis=1) - w  # Σ of the more proximal joints' turns
     m = np.sum(r * w * (w + 2.0 * before), axis=1)  # Σᵢⱼ wᵢwⱼ r_max(i,j)
     return BOUND_SAFETY * 2.0 * m / 8.0

@@ -45,6 +45,7 @@ from rapidfix.postprocess.path import (
     chain_span,
     line_deviation_bound,
     refine,
+    wrist_levers,
 )
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
@@ -307,7 +308,6 @@ class _Rewriter:
             at = np.fromiter(absj, dtype=int, count=len(absj))
             q0i[at] = q0c[at] = np.array(list(absj.values()))
             start_flange[at] = self.robot.fk(q0i[at])
-        q0i_rows = (from_row, at if absj else None)
         frames = t.placement.take(to_row)
         start_tcp = frames.tcp(start_flange)
         curves = Curves(start_tcp, t.pose[to_row], t.pose[via_row, :3, 3], circular)
@@ -322,7 +322,7 @@ class _Rewriter:
                                      Context(payload_kg=payload[seg]))
             return sub.q_ideal, sub.q_cmd, sub.ok
 
-        bound = self._line_bounds(start_flange, to_row, q0i_rows, q0i, q0c, frames)
+        bound = self._line_bounds(start_flange, to_row, q0c, frames)
         bound[circular] = np.inf
         self.refinement = refine(
             curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
@@ -332,25 +332,16 @@ class _Rewriter:
             self.mode[segs[k]] = "filtered"
         self.seg_frames, self.seg_payload = frames, payload
 
-    def _line_bounds(self, start_flange: np.ndarray, to_row: np.ndarray, start_rows: tuple,
-                     q0i: np.ndarray, q0c: np.ndarray, frames: Placement) -> np.ndarray:
+    def _line_bounds(self, start_flange: np.ndarray, to_row: np.ndarray, q0c: np.ndarray,
+                     frames: Placement) -> np.ndarray:
         """An upper bound of each segment's bow as a line (`path.line_deviation_bound`),
         inf where the robot does not carry the tool: a CAM program's short moves are
-        settled by it without sampling. `start_rows`: (target row each segment starts
-        at, segments starting at a MoveAbsJ instead or None)."""
-        p = self.plan_
-        from_row, absj = start_rows
-        end_flange = p.flange[to_row]
-        tool_t = frames.tool[:, :3, 3]
-        carried0 = np.einsum("nij,nj->ni", start_flange[:, :3, :3], tool_t) + start_flange[:, :3, 3]
-        carried1 = np.einsum("nij,nj->ni", end_flange[:, :3, :3], tool_t) + end_flange[:, :3, 3]
-        dirs, points = self.robot.joint_frames(p.q_ideal)  # once per target row
-        dirs0, points0 = dirs[from_row], points[from_row]
-        if absj is not None:
-            dirs0[absj], points0[absj] = self.robot.joint_frames(q0i[absj])
+        settled by it without sampling."""
+        robot, p = self.robot, self.plan_
         bound = line_deviation_bound(
-            chain_span(self.robot.axis_points), carried0, carried1, p.q_cmd[to_row] - q0c,
-            (dirs0, points0), (dirs[to_row], points[to_row]))
+            chain_span(robot.axis_points),
+            wrist_levers(robot.axis_dirs, robot.axis_points, robot.home),
+            start_flange, p.flange[to_row], frames.tool[:, :3, 3], p.q_cmd[to_row] - q0c)
         bound[frames.stationary] = np.inf
         return bound
 

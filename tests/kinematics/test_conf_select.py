@@ -132,3 +132,23 @@ def test_compact_nearest_is_the_slot_by_slot_nearest(name, variant, seed):
     assert np.array_equal(np.isnan(got_q), np.isnan(want_q))
     assert np.array_equal(np.nan_to_num(got_q), np.nan_to_num(want_q))
     assert (got_status == IKStatus.OK).sum() > n / 3
+
+
+def test_large_batches_go_through_in_chunks_with_the_same_answers(monkeypatch):
+    from rapidfix.kinematics import model as model_module
+
+    robot = load_robot("IRB1600-10/1.45")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (50, 6))
+    poses = robot.fk(q)
+    conf = robot.confdata(q)
+    conf[::7, 3] = (conf[::7, 3] + 3) % 8  # some branches that do not match
+    poses[5, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
+    whole_q, whole_status = robot.ik_conf(poses, conf)
+    monkeypatch.setattr(model_module, "IK_CHUNK", 8)  # six full chunks and a short one
+    q_c, status_c = robot.ik_conf(poses, conf)
+    assert np.array_equal(np.nan_to_num(q_c, nan=9.0), np.nan_to_num(whole_q, nan=9.0))
+    assert np.array_equal(status_c, whole_status)
+    assert {IKStatus.OK, IKStatus.UNREACHABLE} <= set(status_c.tolist())
+    ok = status_c == IKStatus.OK
+    assert np.allclose(robot.fk(q_c[ok]), poses[ok], atol=1e-8)

@@ -345,7 +345,7 @@ ENDMODULE
 @pytest.mark.parametrize("step_deg", [0.02, 0.2, 2.0, 10.0])
 def test_the_line_bound_holds_for_joint_moves_the_model_predicts(comp, step_deg):
     from rapidfix.errors.context import Context
-    from rapidfix.postprocess.path import chain_span, line_deviation_bound
+    from rapidfix.postprocess.path import chain_span, line_deviation_bound, wrist_levers
 
     robot, model = comp.robot, comp.model
     rng = np.random.default_rng(int(step_deg * 100))
@@ -355,9 +355,12 @@ def test_the_line_bound_holds_for_joint_moves_the_model_predicts(comp, step_deg)
     q1 = q0 + np.radians(step_deg) * rng.uniform(-1, 1, (n, 6))
     tool = np.array([30.0, -20.0, 150.0])
 
+    def flange(q):
+        return model.actual_flange(robot, q, Context(payload_kg=np.full(len(q), 2.0)))
+
     def carried(q):
-        flange = model.actual_flange(robot, q, Context(payload_kg=np.full(len(q), 2.0)))
-        return np.einsum("nij,j->ni", flange[:, :3, :3], tool) + flange[:, :3, 3]
+        f = flange(q)
+        return np.einsum("nij,j->ni", f[:, :3, :3], tool) + f[:, :3, 3]
 
     # the truth: the predicted path sampled finely, its distance from its own chord
     s = np.linspace(0.0, 1.0, 41)
@@ -369,8 +372,11 @@ def test_the_line_bound_holds_for_joint_moves_the_model_predicts(comp, step_deg)
     off = rel - np.sum(rel * chord, axis=2, keepdims=True) * chord
     truth = np.linalg.norm(off, axis=2).max(axis=1)
 
-    bound = line_deviation_bound(chain_span(robot.axis_points), carried(q0), carried(q1), q1 - q0,
-                                 robot.joint_frames(q0), robot.joint_frames(q1))
+    # the bound sees the nominal flange poses the plan has, not the model's
+    bound = line_deviation_bound(
+        chain_span(robot.axis_points), wrist_levers(robot.axis_dirs, robot.axis_points,
+                                                    robot.home),
+        robot.fk(q0), robot.fk(q1), np.tile(tool, (n, 1)), q1 - q0)
     assert np.all(truth <= bound)
     # conservative, yet it settles CAM-sized steps
     # (0.5 mm is about 0.02° per joint) without sampling: below 10 % of 0.1 mm
@@ -392,3 +398,24 @@ def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, ste
     many = NameAllocator(texts=[text])
     assert many.allocate_many(stems, prefix) == [one.allocate(s, prefix) for s in stems]
     assert many.allocate("p1", prefix) == one.allocate("p1", prefix)
+
+
+def test_wrist_levers_bound_the_distance_from_every_wrist_axis_on_every_robot():
+    from rapidfix.kinematics import available_robots, load_robot
+    from rapidfix.postprocess.path import wrist_levers
+
+    rng = np.random.default_rng(11)
+    for name in available_robots():
+        robot = load_robot(name)
+        foot, gap = wrist_levers(robot.axis_dirs, robot.axis_points, robot.home)
+        q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (200, 6))
+        flange = robot.fk(q)
+        point = rng.uniform(-300, 300, (200, 3))  # carried points in the flange frame
+        p = np.einsum("nij,nj->ni", flange[:, :3, :3], point) + flange[:, :3, 3]
+        lever = np.linalg.norm(p - (flange[:, :3, :3] @ foot + flange[:, :3, 3]), axis=1)
+        dirs, points = robot.joint_frames(q)  # the independent way: the axes themselves
+        for axis in (3, 4, 5):
+            rel = p - points[:, axis]
+            along = np.sum(rel * dirs[:, axis], axis=1)[:, None] * dirs[:, axis]
+            distance = np.linalg.norm(rel - along, axis=1)
+            assert np.all(distance <= lever + gap + 1e-9), (name, axis)
