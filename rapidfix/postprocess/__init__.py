@@ -11,7 +11,8 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `naming`       collision-free RAPID identifiers for new data
 - `literals`     jointtarget / robtarget literals for many targets at once
 - `header`       the header comment, and recognising a compensated program
-- `verify`       re-parse the output and predict where the robot will go
+- `check_units`  the new statements and declarations, as a program of their own
+- `verify`       re-parse them (in bulk where simple) and predict where the robot will go
 - `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
