@@ -11,6 +11,7 @@ per target, in program order, so that everything after this is vectorised.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -302,10 +303,15 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
                        Placement.identity(0), np.zeros(0), np.zeros(0, int), [])
-    trans = np.array([r[0] for r in values], dtype=float)
-    rot = np.array([r[1] for r in values], dtype=float)
-    conf = np.array([r[2] for r in values], dtype=float).astype(int)
-    extax = np.array([r[3] for r in values], dtype=float)
+    n = len(values)
+
+    def column(k: int, width: int) -> np.ndarray:
+        """Item k of every value (all of length `width`, shape-checked), as (n, width)."""
+        flat = np.fromiter(chain.from_iterable(r[k] for r in values), dtype=float)
+        return flat.reshape(n, width)  # a value of another length fails here
+
+    trans, rot, extax = column(0, 3), column(1, 4), column(3, 6)
+    conf = column(2, 4).astype(int)
     owner, count, which = (np.array(column, dtype=int) for column in zip(*blocks))
     row_set = np.repeat(which, count)
     # a stand-in for the frame sets that are reasons (no row uses them)

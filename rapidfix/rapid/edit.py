@@ -8,7 +8,6 @@ ending; the result is encoded with the file's encoding and BOM. With no edits,
 
 from __future__ import annotations
 
-import itertools
 import operator
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -153,10 +152,16 @@ class Editor:
 
     def _ordered(self) -> list[Edit]:
         edits = sorted(self._edits, key=_order_key)
-        for before, after in itertools.pairwise(edits):
-            if after.start < before.end or (after.start == before.start
-                                            and before.end > before.start
-                                            and after.end > after.start):
+        if len(edits) > 1:
+            # an edit may not start inside the one before it, nor two replacements
+            # (not insertions) start at the same place; checked for all pairs at once
+            start = np.fromiter((e.start for e in edits), dtype=np.int64, count=len(edits))
+            end = np.fromiter((e.end for e in edits), dtype=np.int64, count=len(edits))
+            nonempty = end > start
+            clash = (start[1:] < end[:-1]) | (
+                (start[1:] == start[:-1]) & nonempty[:-1] & nonempty[1:])
+            if clash.any():
+                after = edits[int(np.argmax(clash)) + 1]
                 raise EditConflict(
                     f"edits overlap at {self.program.span(after.start, after.end).location}")
         return edits
