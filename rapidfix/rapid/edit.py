@@ -170,13 +170,17 @@ class Editor:
     def text(self) -> str:
         """The edited text (decoded)."""
         original = self.program.text
+        # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
+        marker = "\r" if self.program.newline == "\n" else "\n"
+        newlines = self._newlines
         pieces = []
+        append = pieces.append
         position = 0
         for start, end, text, _order in self._ordered():
-            pieces.append(original[position:start])
-            pieces.append(self._newlines(text) if "\n" in text else text)
+            append(original[position:start])
+            append(newlines(text) if marker in text else text)
             position = end
-        pieces.append(original[position:])
+        append(original[position:])
         return "".join(pieces)
 
     def render(self) -> bytes:
