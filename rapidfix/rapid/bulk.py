@@ -31,7 +31,6 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     _CALL_PIECE,
-    _DECL,
     _VALUE_TEXT,
     _WS,
     FastSyntaxBuilder,
@@ -70,6 +69,13 @@ def run_parser() -> Lark:
                 transformer=_RunBuilder(), cache=True)
 
 
+# A declaration whose syntax the lexer has checked: its type, name and value text
+# (the storage and LOCAL / TASK are not needed to read values back).
+_BULK_DECL = re.compile(
+    rf"{_WS}*(?:(?i:LOCAL){_WS}+)?(?:(?i:TASK){_WS}+)?(?i:VAR|PERS|CONST){_WS}+"
+    rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
+    rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
+)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
 _BULK_CALL = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
@@ -140,10 +146,10 @@ class _Reader:
         self.program = BulkProgram()
 
     def declarations(self, run_text: str, module: str, routine: str | None) -> None:
-        found = _DECL.findall(run_text)
+        found = _BULK_DECL.findall(run_text)
         if not found:  # pragma: no cover - a run holds at least one declaration
             return
-        *_, types, names, values = zip(*found)
+        types, names, values = zip(*found)
         # the first declaration of a name wins, as in the model (setdefault, at C speed)
         scope = self.program.data.setdefault((module, routine), {})
         deque(map(scope.setdefault, map(str.lower, names),

@@ -173,3 +173,20 @@ def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypat
     if phased.points_added == 0:
         assert phased.data == looped.data
     assert looped.moves_compensated == phased.moves_compensated
+
+
+def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_route():
+    from rapidfix.postprocess.verify import _joint_values, _NotBulk
+
+    good = ["[[1,-2.5,3E+02,.5,1.,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
+            "[[-0.000001,10,20,30,40,50],[0,0,0,0,0,1.25]]"] * 300
+    got = _joint_values(good)
+    want = [[float(v) for v in t[2:t.index("]")].split(",")] for t in good]
+    assert np.array_equal(got, np.array(want))
+    for bad in ["[[1.2.3,0,0,0,0,0],[0,0,0,0,0,0]]", "[[1e,0,0,0,0,0],[0,0,0,0,0,0]]",
+                "[[--1,0,0,0,0,0],[0,0,0,0,0,0]]", "[[0,0,0,0,0],[0,0,0,0,0,0]]",
+                "[[0,0,0,0,0,0,0],[0,0,0,0,0,0]]", "[[0,0,0,0,0,0],[0,0,0,0,0]]",
+                "[[0,0,0,0,0,0],[0,0,0,0,0,0],[0]]", "[[0,0,0,0,0,0]]", "[[1e999,0,0,0,0,0],"
+                "[0,0,0,0,0,0]]"]:
+        with pytest.raises(_NotBulk):
+            _joint_values([*good[:5], bad, *good[:300]])
