@@ -13,7 +13,6 @@ and the intended TCP is the predicted deviation.
 from __future__ import annotations
 
 import re
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -128,11 +127,7 @@ class _NotBulk(Exception):
     """The bulk reader met a target it does not read (the full route decides)."""
 
 
-_NUM = r"[-+0-9.eE]+"
-_JOINT_TEXT = rf"\[\[{_NUM}(?:,{_NUM}){{5}}\],\[{_NUM}(?:,{_NUM}){{5}}\]\]"
-#: literals per block checked by one match (the match's record grows with the count)
-_RUN = 256
-_JOINT_BLOCK = re.compile(rf"{_JOINT_TEXT}(?:\n{_JOINT_TEXT})*")
+_JOINT_LITERAL = re.compile(r"\[\[([-+0-9.eE,]*)\],\[([-+0-9.eE,]*)\]\]")
 
 
 def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) -> ReadBack:
@@ -242,26 +237,36 @@ def _robtarget_value(text: str) -> tuple:
 
 
 def _joint_values(texts: list[str]) -> np.ndarray:
-    """Robot axes (K,6) of jointtarget literals `[[j1..j6],[e1..e6]]`, read in one pass.
-
-    The shape of every literal is checked by one regular expression per block of
-    texts, and all numbers are read by one C-level conversion, which must take
-    them all (a malformed number stops it short).
-    """
-    block = _JOINT_BLOCK.fullmatch
-    for start in range(0, len(texts), _RUN):
-        if block("\n".join(texts[start:start + _RUN])) is None:
+    """Robot axes (K,6) of jointtarget literals `[[j1..j6],[e1..e6]]`, read in one pass."""
+    match = _JOINT_LITERAL.fullmatch
+    groups = []
+    extax_ok: dict[str, bool] = {}
+    for text in texts:
+        m = match(text)
+        if m is None:
             raise _NotBulk
-    flat = ",".join(texts).replace("[[", "").replace("],[", ",").replace("]]", "")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # a partial read warns: take it as a failure
-        try:
-            values = np.fromstring(flat, dtype=float, sep=",")
-        except (ValueError, DeprecationWarning):
-            raise _NotBulk from None
-    if values.size != 12 * len(texts) or not np.all(np.isfinite(values)):
+        robax, extax = m.groups()
+        ok = extax_ok.get(extax)
+        if ok is None:
+            ok = extax_ok[extax] = extax.count(",") == 5 and _numbers(extax)
+        if not ok or robax.count(",") != 5:
+            raise _NotBulk
+        groups.append(robax)
+    try:
+        values = np.array(",".join(groups).split(","), dtype=float).reshape(-1, 6)
+    except ValueError:
+        raise _NotBulk from None
+    if not np.isfinite(values).all():  # the full route decides (and reports) those
         raise _NotBulk
-    return values.reshape(-1, 12)[:, :6]
+    return values
+
+
+def _numbers(group: str) -> bool:
+    try:
+        tuple(map(float, group.split(",")))
+    except ValueError:
+        return False
+    return True
 
 
 def commanded_joints(robot: Any, read: ReadBack, expected: Expected,
