@@ -114,10 +114,9 @@ def test_general_solve_compensates_a_geometry_effect_it_has_no_code_for(joint_mo
     assert np.abs(uncompensated[:, :3, 3] - target[:, :3, 3]).max() > 0.1
 
 
-class Flat(Effect):
-    """Test effect with Δθ = −θ: θ + Δθ is constant, so no θc reaches another target."""
+class _JointEffect(Effect):
+    """A parameterless test effect that adds a joint error."""
 
-    type_name: ClassVar[str] = "test_flat"
     separable: ClassVar[bool] = True
     adds_joint_delta: ClassVar[bool] = True
     param_names = ()
@@ -127,6 +126,12 @@ class Flat(Effect):
 
     def set_params(self, p):
         self._check_length(p)
+
+
+class Flat(_JointEffect):
+    """Test effect with Δθ = −θ: θ + Δθ is constant, so no θc reaches another target."""
+
+    type_name: ClassVar[str] = "test_flat"
 
     def joint_delta(self, q_cmd, ctx):
         out = np.zeros_like(q_cmd)
@@ -159,19 +164,10 @@ def test_context_subsets_follow_the_active_poses():
     assert ctx.direction(np.arange(12.0).reshape(2, 6))[1].tolist() == [1.0] * 6
 
 
-class Play(Effect):
+class Play(_JointEffect):
     """Test effect: each joint lags by 0.02° against its direction of motion (uses ctx)."""
 
     type_name: ClassVar[str] = "test_play"
-    separable: ClassVar[bool] = True
-    adds_joint_delta: ClassVar[bool] = True
-    param_names = ()
-
-    def params(self):
-        return np.zeros(0)
-
-    def set_params(self, p):
-        self._check_length(p)
 
     def joint_delta(self, q_cmd, ctx):
         return -np.radians(0.02) * ctx.direction(q_cmd)
