@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -419,3 +420,20 @@ def test_wrist_levers_bound_the_distance_from_every_wrist_axis_on_every_robot():
             along = np.sum(rel * dirs[:, axis], axis=1)[:, None] * dirs[:, axis]
             distance = np.linalg.norm(rel - along, axis=1)
             assert np.all(distance <= lever + gap + 1e-9), (name, axis)
+
+
+def test_the_written_out_moveabsj_is_the_statement_the_general_edits_make():
+    from rapidfix.postprocess.resolve import Declarations, resolve
+    from rapidfix.postprocess.rewrite import _joint_edits, _joint_statement, _statement_variant
+
+    samples = Path(__file__).resolve().parents[2] / "samples"
+    checked = 0
+    for path in sorted(samples.glob("*.mod")):
+        program = load_program(path)
+        sites, _ = resolve(program, Declarations([]), "jointtargets")
+        for site in sites:
+            if site.kind in "LJC" and site.targets:
+                general = _statement_variant(program, site.motion, _joint_edits(site, "jt_x"))
+                assert _joint_statement(program.text, site, "jt_x") == general
+                checked += 1
+    assert checked > 20
