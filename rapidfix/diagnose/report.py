@@ -77,6 +77,22 @@ def trial_record(trial: Trial) -> dict[str, Any]:
     return record
 
 
+def alternatives(sel: Selection) -> dict[str, list[str]]:
+    """For each accepted effect, the candidates of its round that passed every test too
+    and gained within `BIC_MARGIN` of it: explanations these data do not tell apart
+    (a tracker scale and thermal growth when the temperature hardly varied, say)."""
+    out: dict[str, list[str]] = {}
+    for chosen in sel.accepted:
+        rivals = [t.kind for t in sel.trials
+                  if t.round == chosen.round and t is not chosen and not t.accepted
+                  and not t.after and t.stage is not None and t.verdict == "passes"
+                  and t.kind not in (a.kind for a in sel.accepted)
+                  and chosen.delta_bic - t.delta_bic <= BIC_MARGIN]
+        if rivals:
+            out[chosen.kind] = rivals
+    return out
+
+
 def statement(sel: Selection) -> str:
     """The outcome in one or two plain sentences."""
     before = sel.before.validation.mean_mm
@@ -84,9 +100,13 @@ def statement(sel: Selection) -> str:
     if sel.accepted and sel.final is not None:
         names = " and ".join(t.kind for t in sel.accepted)
         after = sel.final.validation.mean_mm
-        return (f"The residual is explained by {names}: the mean error on the validation "
+        text = (f"The residual is explained by {names}: the mean error on the validation "
                 f"points falls from {before:.4f} mm to {after:.4f} mm (measurement noise "
                 f"alone would leave about {floor:.4f} mm).")
+        for kind, rivals in alternatives(sel).items():
+            text += (f" {' or '.join(rivals)} explains it nearly as well as {kind} (BIC "
+                     f"within {BIC_MARGIN:g}): these data do not tell them apart.")
+        return text
     if before <= 1.25 * floor:
         return (f"The residual is already at the noise floor: {before:.4f} mm mean on the "
                 f"validation points, where measurement noise alone leaves about {floor:.4f} "
@@ -125,6 +145,7 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
     summary: dict[str, Any] = {
         "statement": text,
         "accepted": [t.kind for t in sel.accepted],
+        "indistinguishable_from": alternatives(sel),
         "validation": {"points": len(validation), "before": sel.before.validation.stats(),
                        "after": final.validation.stats()},
         "calibration": {"points": len(calibration),
