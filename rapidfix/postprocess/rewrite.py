@@ -265,7 +265,7 @@ class _Rewriter:
         """Start of every linear/circular move, and intermediate points within the tolerance."""
         if self.options.emit != "jointtargets":
             return
-        self.site_of = site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
+        site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
         before = predecessors(self.program)
         mode, sites = self.mode, self.sites
         segs: list[int] = []

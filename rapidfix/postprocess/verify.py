@@ -142,10 +142,7 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], expected: Expected) 
     call_of_row = np.asarray(index_of)[expected.motion].tolist() if k else []
     run_of_row = (np.searchsorted([r[0] for r in bulk.runs], call_of_row, side="right") - 1
                   ).tolist() if k else []
-    # per run of calls: the routine's data, then the module's
-    empty: dict[str, tuple[str, str]] = {}
-    scopes = [(bulk.data.get((module, routine), empty), bulk.data.get((module, None), empty))
-              for _, module, routine in bulk.runs]
+    scopes = bulk.run_scopes()  # per run of calls: the routine's data, then the module's
     if k and len(set(map(id, (d for pair in scopes for d in pair)))) <= 2:
         quick = _jointtargets_named_first(bulk, call_of_row, expected, scopes[0])
         if quick is not None:

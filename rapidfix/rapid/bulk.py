@@ -80,6 +80,7 @@ _BULK_DECL = re.compile(
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
 _BULK_CALL = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
 _TAIL_LIMIT = 4096
+_EMPTY: dict[str, tuple[str, str]] = {}
 
 
 @dataclass
@@ -118,13 +119,20 @@ class BulkProgram:
                 self._tails[rest] = parsed
         return ((first, *parsed[0]) if first else parsed[0]), parsed[1]
 
+    def visible(self, module: str, routine: str) -> tuple[dict, dict]:
+        """The data a call in `routine` of `module` sees: (the routine's, the module's);
+        other modules' data are not looked into."""
+        return self.data.get((module, routine), _EMPTY), self.data.get((module, None), _EMPTY)
+
+    def run_scopes(self) -> list[tuple[dict, dict]]:
+        """`visible` for each run of calls, in the order of `runs`."""
+        return [self.visible(module, routine) for _, module, routine in self.runs]
+
     def lookup(self, module: str, routine: str, name: str) -> tuple[str, str | None] | None:
-        """A name as a call in `routine` of `module` sees it: routine data, then module data
-        (other modules' data are not looked into)."""
+        """A name as a call in `routine` of `module` sees it: routine data, then module data."""
         key = name.lower()
-        found = self.data.get((module, routine), {}).get(key)
-        if found is None:
-            found = self.data.get((module, None), {}).get(key)
+        local, module_data = self.visible(module, routine)
+        found = local.get(key) or module_data.get(key)
         return None if found is None else (found[0], found[1] or None)
 
 
