@@ -217,6 +217,17 @@ def backend_for(model: RobotModel, backend: str | None = None) -> str:
     return "numba" if accelerated() else "numpy"
 
 
+def prepare(model: RobotModel) -> None:
+    """Load the compiled closed form for `model` now, if it is the one that will be used.
+
+    numba reads its cached machine code on a kernel's first call (about 0.4 s);
+    a tool that loads a robot once and then solves many batches (every file of
+    a batch run) pays that here, once, instead of inside its first batch.
+    """
+    if backend_for(model) == "numba":
+        solve_all(model, np.array(model.home)[None])  # writable, as in real use
+
+
 def solve_all(
     model: RobotModel,
     T: np.ndarray,

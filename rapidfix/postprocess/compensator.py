@@ -15,6 +15,7 @@ from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import load_model
 from rapidfix.exceptions import KinematicsError, ModelError
 from rapidfix.kinematics import load_robot
+from rapidfix.kinematics.ik import prepare
 from rapidfix.postprocess.header import sha256_bytes, sha256_file
 
 
@@ -58,4 +59,5 @@ class Compensator:
 
         paths = [str(p) for p in (decl_files or [])]
         decls = [load_program(p) for p in paths]
+        prepare(robot_model)  # a batch's files then share the kernels' one-time load
         return cls(robot_model, model, str(model_path), sha256_file(model_path), decls, paths)

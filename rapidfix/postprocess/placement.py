@@ -7,6 +7,10 @@ object: flange = tool ∘ target⁻¹ ∘ wobj⁻¹. This module keeps the frame
 move of a program in arrays so the conversion is one vectorised expression, with
 the stationary-tool moves selected by a mask (`rapidfix.kinematics.frames` holds
 the same formulas for a single tool and work object).
+
+Most programs use one tool and one work object for every move: such frames are
+one (4,4) matrix broadcast to (N,4,4) (`shared`), which costs no memory and is
+inverted once; subsets of them stay broadcast.
 """
 
 from __future__ import annotations
@@ -39,11 +43,13 @@ class Placement:
 
     def take(self, index: np.ndarray) -> Placement:
         """The frames of a subset of the moves (indices or boolean mask)."""
-        return Placement(self.tool[index], self.wobj[index], self.stationary[index])
+        stationary = self.stationary[index]
+        n = stationary.shape[0]
+        return Placement(_rows(self.tool, index, n), _rows(self.wobj, index, n), stationary)
 
     def flange(self, target: np.ndarray) -> np.ndarray:
         """Flange poses (N,4,4) in the base frame that put the TCP on `target` (N,4,4)."""
-        out = self.wobj @ target @ invert_transform(self.tool)
+        out = self.wobj @ target @ _inverse(self.tool)
         fixed = self.stationary
         if fixed.any():
             out[fixed] = (self.tool[fixed] @ invert_transform(target[fixed])
@@ -52,9 +58,30 @@ class Placement:
 
     def tcp(self, flange: np.ndarray) -> np.ndarray:
         """TCP poses (N,4,4) in the work-object frame for flange poses (N,4,4) in the base."""
-        out = invert_transform(self.wobj) @ flange @ self.tool
+        out = _inverse(self.wobj) @ flange @ self.tool
         fixed = self.stationary
         if fixed.any():
             out[fixed] = (invert_transform(self.wobj[fixed]) @ invert_transform(flange[fixed])
                           @ self.tool[fixed])
         return out
+
+
+def shared(frame: np.ndarray, n: int) -> np.ndarray:
+    """One frame (4,4) as the read-only (n,4,4) frames of n moves, without copies."""
+    return np.broadcast_to(np.asarray(frame, dtype=float), (n, 4, 4))
+
+
+def _is_shared(frames: np.ndarray) -> bool:
+    return frames.ndim == 3 and frames.shape[0] > 0 and frames.strides[0] == 0
+
+
+def _rows(frames: np.ndarray, index: np.ndarray, n: int) -> np.ndarray:
+    """frames[index] (n rows), still shared when `frames` is."""
+    return shared(frames[0], n) if _is_shared(frames) else frames[index]
+
+
+def _inverse(frames: np.ndarray) -> np.ndarray:
+    """invert_transform(frames), computed once for shared frames."""
+    if _is_shared(frames):
+        return shared(invert_transform(frames[0]), frames.shape[0])
+    return invert_transform(frames)

@@ -56,6 +56,8 @@ def compensation_tool(placement: Placement) -> np.ndarray:
     With a stationary tool the robot carries the work object, so the flange pose
     itself must be reached.
     """
+    if not placement.stationary.any():
+        return placement.tool
     eye = np.broadcast_to(np.eye(4), placement.tool.shape)
     return np.where(placement.stationary[:, None, None], eye, placement.tool)
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from rapidfix.kinematics.frames import pose
-from rapidfix.postprocess.placement import Placement
+from rapidfix.postprocess.placement import Placement, shared
 from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program
 from rapidfix.rapid.values import ToolData, WobjData
 
@@ -323,7 +323,12 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     wobj_o = _poses([f.wobj.oframe if f.wobj is not None else identity for f in chosen])
     stationary = np.array([not f.tool.robhold for f in chosen], dtype=bool)
     mass = np.array([f.mass for f in chosen], dtype=float)
-    placement = Placement(tool[row_set], (wobj_u @ wobj_o)[row_set], stationary[row_set])
+    wobj = wobj_u @ wobj_o
+    if (row_set == row_set[0]).all():  # one tool and work object throughout: no copies
+        first = row_set[0]
+        placement = Placement(shared(tool[first], n), shared(wobj[first], n), stationary[row_set])
+    else:
+        placement = Placement(tool[row_set], wobj[row_set], stationary[row_set])
     return Targets(pose(trans, rot), conf, extax, placement, mass[row_set],
                    np.repeat(owner, count), operands)
 

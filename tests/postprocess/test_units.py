@@ -246,6 +246,31 @@ def test_placement_matches_the_kinematics_frames_for_both_tool_kinds():
     assert np.allclose(placement.tcp(flange), target)
 
 
+def test_shared_frames_give_what_copied_frames_give():
+    """One tool and work object broadcast to every move (no copies) converts, subsets
+    and inverts exactly as the same frames copied per move, and stays broadcast."""
+    from rapidfix.postprocess.placement import Placement, shared
+
+    rng = np.random.default_rng(3)
+    n = 7
+    frames = np.tile(np.eye(4), (3, n, 1, 1))
+    for k in range(3):
+        frames[k, :, :3, :3] = Rotation.random(n, random_state=10 + k).as_matrix()
+        frames[k, :, :3, 3] = rng.uniform(-300, 300, (n, 3))
+    tool, wobj, target = frames[0][0], frames[1][0], frames[2]
+    for stationary in (np.zeros(n, bool), np.array([False, True] * 3 + [False])):
+        one = Placement(shared(tool, n), shared(wobj, n), stationary)
+        copied = Placement(np.tile(tool, (n, 1, 1)), np.tile(wobj, (n, 1, 1)), stationary)
+        assert one.tool.strides[0] == 0  # one matrix, viewed n times
+        assert np.allclose(one.flange(target), copied.flange(target))
+        assert np.allclose(one.tcp(copied.flange(target)), target)
+        for index in (np.array([4, 1, 1]), stationary, np.arange(n)):
+            part, want = one.take(index), copied.take(index)
+            assert part.tool.strides[0] == 0 and len(part) == len(want)
+            assert np.array_equal(part.tool, want.tool) and np.array_equal(part.wobj, want.wobj)
+            assert np.allclose(part.flange(target[index]), want.flange(target[index]))
+
+
 def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell):
     from rapidfix.kinematics import IKStatus
     from rapidfix.kinematics.confdata import conf_matches
