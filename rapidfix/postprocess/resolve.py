@@ -107,20 +107,6 @@ def operand_data(operand: Operand | None, type_name: str, outside: Declarations)
     return None, reason
 
 
-#: the target parameters of motion instructions, in the order they are written
-_TARGET_KEYS = ("cirpoint", "topoint", "tojointpos")
-
-
-def motion_targets(motion: MotionInstruction) -> list[Operand]:
-    """The target operands of a motion instruction (CirPoint before ToPoint).
-
-    What `MotionInstruction.targets` returns, read straight from its argument
-    dict: this runs once per move of a program.
-    """
-    args = motion.arguments
-    return [args[key] for key in _TARGET_KEYS if key in args]
-
-
 def _target_value(operand: Operand, outside: Declarations) -> tuple[Any, str]:
     """A robtarget operand's raw value ((x,y,z), (q1..q4), (cf..), (e..)), or (None, reason).
 
@@ -243,6 +229,15 @@ def _site_values(operands: list[Operand], outside: Declarations) -> list[tuple] 
     return values
 
 
+def _around_targets(motion: MotionInstruction) -> tuple[str | None, tuple]:
+    """(why MoveAbsJ cannot take an optional argument or None, what decides the frames)."""
+    optional = motion.optional
+    key = (_operand_key(motion.arguments.get("tool")),
+           _operand_key(optional.get("wobj") if optional else None),
+           _operand_key(optional.get("tload") if optional else None))
+    return (_optional_reason(motion) if optional else None), key
+
+
 def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Site], Targets]:
     """Sites for every robtarget motion instruction, and the rows of the usable targets.
 
@@ -257,6 +252,7 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
     frames = _FrameCache(outside)
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
+    by_tail: dict[Any, tuple[str | None, tuple]] = {}
     for motion in program.motions:
         info = kinds.get(motion.name)
         if info is None:
@@ -264,11 +260,19 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         moves_to_robtargets, kind, reason = info
         if not moves_to_robtargets:
             continue
-        site_ops = motion_targets(motion)
+        site_ops = motion.targets
         if not site_ops:
             continue
-        if reason is None and emit == "jointtargets" and motion.optional:
-            reason = _optional_reason(motion)
+        # what depends on the operands besides the targets: once per shared tail
+        shared = motion.shared
+        around = by_tail.get(shared) if shared is not None else None
+        if around is None:
+            around = _around_targets(motion)
+            if shared is not None:
+                by_tail[shared] = around
+        option_reason, key = around
+        if reason is None and emit == "jointtargets":
+            reason = option_reason
         site = Site(motion, kind, site_ops, reason=reason)
         sites.append(site)
         if reason is not None:
@@ -277,10 +281,6 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         if isinstance(found, str):
             site.reason = found
             continue
-        optional = motion.optional
-        key = (_operand_key(motion.arguments.get("tool")),
-               _operand_key(optional.get("wobj") if optional else None),
-               _operand_key(optional.get("tload") if optional else None))
         known = frame_sets.get(key)
         if known is None:
             known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))

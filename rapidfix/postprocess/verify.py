@@ -25,7 +25,6 @@ from rapidfix.kinematics.frames import pose
 from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
-from rapidfix.postprocess.resolve import motion_targets
 from rapidfix.rapid import MotionInstruction, motion_spec
 from rapidfix.rapid.bulk import BulkProgram, read_bulk
 from rapidfix.rapid.fastpath import NotFast, aggregate_value
@@ -107,7 +106,7 @@ def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> Read
     k = expected.motion.shape[0]
     out = ReadBack.empty(k)
     for i, (m, slot) in enumerate(zip(expected.motion.tolist(), expected.slot.tolist())):
-        operand = motion_targets(motions[m])[slot]
+        operand = motions[m].targets[slot]
         value = operand.value if operand.static else None
         if value is None or operand.type_name not in ("jointtarget", "robtarget"):
             raise RapidSemanticError(

@@ -210,7 +210,7 @@ def _value_node(text: str, start: int) -> s.Expr:
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
 _CALL_HEAD = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
-# Distinct argument tails kept per token (a CAM program has a few dozen).
+# Distinct argument tails kept (a CAM program has a few dozen).
 _TAIL_LIMIT = 4096
 
 # One argument of a tail, offsets relative to the tail: (kind, start, end,
@@ -248,46 +248,76 @@ def _tail(text: str) -> tuple[_TailArgument, ...]:
     return tuple(entries)
 
 
+class CallTail:
+    """The arguments after a call's name or first argument, read once per distinct
+    text and made into nodes for every call that ends with that text
+    (rapidfix.rapid.syntax.LazyCall).
+
+    `pieces` describes them for readers that need no nodes: per argument its kind
+    ('required' or 'optional'), its optional name (None for a required one) and its
+    value: the data name for a plain name, '' for none (a switch), None for a
+    number or an aggregate.
+    """
+
+    __slots__ = ("entries", "pieces")
+
+    def __init__(self, text: str) -> None:
+        self.entries = _tail(text)
+        self.pieces = tuple(
+            (kind, option, "" if node is None else fields[0] if node is s.NameRef else None)
+            for kind, _, _, option, node, _, _, fields in self.entries)
+
+    def arguments(self, shift: int) -> list[s.Argument]:
+        """The Argument nodes of the tail standing at offset `shift`."""
+        argument = s.Argument
+        return [argument(shift + start, shift + end, kind, option, None if node is None else
+                         node(shift + value_start, shift + value_end, *fields))
+                for kind, start, end, option, node, value_start, value_end, fields
+                in self.entries]
+
+
+# Distinct call tails kept across tokens and files (a CAM program has a few dozen).
+_TAILS: dict[str, CallTail] = {}
+
+
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
 
     A call is its name, perhaps a first argument, and a tail of further
     arguments. In a CAM program the first argument (the target) changes from line
     to line but the tail (speed, zone, tool, work object) recurs, so each
-    distinct tail is read once and its nodes are then made from what was read,
-    shifted to where the tail stands. Names are interned.
+    distinct tail is read once (CallTail), and each call is a LazyCall that makes
+    the tail's nodes, shifted to where it stands, only when they are asked for.
+    Names are interned.
     """
     calls: list[s.ProcedureCall] = []
-    tails: dict[str, tuple[_TailArgument, ...]] = {}
-    argument, name_ref, procedure_call, intern = (
-        s.Argument, s.NameRef, s.ProcedureCall, sys.intern)
+    tails = _TAILS
+    argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
     head, find = _CALL_HEAD.match, text.index
     pos, size = 0, len(text)
     while pos < size:
         m = head(text, pos)
         first = m.group(2)
-        args: list[s.Argument] = []
-        if first is not None:
+        if first is None:
+            head_arg = None
+        else:
             at = base + m.start(2)
             if first[0].isalpha():
-                node: s.Expr | None = name_ref(at, at + len(first), intern(first))
+                node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
-            args.append(argument(at, node.end, "required", None, node))
+            head_arg = argument(at, node.end, "required", None, node)
         tail_at = m.end()
         pos = find(";", tail_at) + 1
         tail_text = text[tail_at:pos]
-        entries = tails.get(tail_text)
-        if entries is None:
-            entries = _tail(tail_text)
-            if len(tails) < _TAIL_LIMIT:
-                tails[tail_text] = entries
-        shift = base + tail_at
-        for kind, start, end, option, node_type, value_start, value_end, fields in entries:
-            node = None if node_type is None else node_type(
-                shift + value_start, shift + value_end, *fields)
-            args.append(argument(shift + start, shift + end, kind, option, node))
-        calls.append(procedure_call(base + m.start(1), base + pos, intern(m.group(1)), args))
+        tail = tails.get(tail_text)
+        if tail is None:
+            tail = CallTail(tail_text)
+            if len(tails) >= _TAIL_LIMIT:
+                tails.clear()
+            tails[tail_text] = tail
+        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
+                               tail, base + tail_at))
     return calls
 
 

@@ -64,6 +64,33 @@ class _Write:
     in_loop: bool
 
 
+# per required position of an instruction: (parameter key, type hint, operand cache)
+_Layout = tuple[tuple[str, "str | None", dict], ...]
+
+
+class _SharedTail:
+    """The operands after the target that calls with the same tail share within a
+    routine: their Operands are made (around each call's own argument nodes) only
+    when a move's `arguments` or `optional` are asked for."""
+
+    __slots__ = ("entries", "target_key")
+
+    def __init__(self, target_key: str, entries: tuple[tuple[bool, str, Operand], ...]
+                 ) -> None:
+        self.target_key = target_key
+        self.entries = entries  # per tail argument: (optional, key, operand of the first call)
+
+    def operands(self, motion: MotionInstruction) -> tuple[dict[str, Operand],
+                                                          dict[str, Operand]]:
+        arguments = {self.target_key: motion.targets[0]}
+        optional: dict[str, Operand] = {}
+        for (is_optional, key, first), arg in zip(self.entries, motion.syntax.args[1:]):
+            (optional if is_optional else arguments)[key] = Operand(
+                arg, first.source, first.text, first.form, first.name, first.type_name,
+                first.value, first.static, first.reason, first.declaration)
+        return arguments, optional
+
+
 def _root_name(expr: s.Expr | None) -> s.NameRef | None:
     while isinstance(expr, (s.Index, s.Component)):
         expr = expr.base
@@ -204,7 +231,7 @@ class ModelBuilder:
         for body in bodies:
             for statement, loops in s.walk_statements(body):
                 kind = type(statement)
-                if kind is s.ProcedureCall:
+                if kind is s.LazyCall or kind is s.ProcedureCall:
                     self._scan_call(statement, module, routine, loops > 0)
                 elif kind is s.Assignment:
                     self._note_write(statement.target, module, rkey,
@@ -366,63 +393,124 @@ class ModelBuilder:
                 return None, type_name, False, f"value does not fit {type_name}: {err}"
         return value, type_name, True, None
 
+    def _operands(self, call: s.ProcedureCall, layout: _Layout, module: str,
+                  rkey: str) -> tuple[dict[str, Operand], dict[str, Operand]]:
+        """(arguments, optional) of a motion instruction's call."""
+        source, name_ref, operand, caches = self.source, s.NameRef, Operand, self.name_operands
+        roles, n_roles = layout, len(layout)
+        arguments: dict[str, Operand] = {}
+        optional: dict[str, Operand] = {}
+        index = 0
+        for arg in call.args:
+            if arg.kind == "required":
+                if arg.name is None and index < n_roles:
+                    key, hint, cache = roles[index]
+                else:
+                    key = arg.name.lower() if arg.name is not None else f"#{index + 1}"
+                    hint = _ROLE_TYPES.get(key)
+                    cache = caches.setdefault((module, rkey, hint), {})
+                index += 1
+                into = arguments
+            else:
+                key = arg.key or ""
+                hint = _ROLE_TYPES.get(key)
+                cache = caches.setdefault((module, rkey, hint), {})
+                into = optional
+            expr = arg.value
+            if type(expr) is name_ref:
+                # the same speed, zone, tool or target name recurs on many lines
+                name = expr.name  # as spelt: no lower()
+                cached = cache.get(name)
+                if cached is None:
+                    cached = cache[name] = self._name_operand(expr, hint, module, rkey)
+                # a name's text is its node's string, shared by every use of the name
+                into[key] = operand(arg, source, name, "name", name, *cached)
+            else:
+                into[key] = self._operand(arg, hint, module, rkey)
+        return arguments, optional
+
+    def _shared_tail(self, call: s.LazyCall, spec: MotionSpec, layout: _Layout,
+                     arguments: dict[str, Operand], optional: dict[str, Operand]
+                     ) -> _SharedTail | None:
+        """What every call with this call's tail (in the same routine) shares, when its
+        first argument is its only target and the rest are data names or switches."""
+        if call.head is None or not layout or layout[0][0] not in spec.target_keys:
+            return None
+        entries = []
+        index = 1
+        for (kind, _, value), arg in zip(call.tail.pieces, call.args[1:]):
+            if value is None:
+                return None
+            if kind == "required":
+                key = layout[index][0] if index < len(layout) else f"#{index + 1}"
+                if key in spec.target_keys:
+                    return None
+                index += 1
+                entries.append((False, key, arguments[key]))
+            else:
+                entries.append((True, arg.key, optional[arg.key]))
+        return _SharedTail(layout[0][0], tuple(entries))
+
     def _motions(self) -> list[MotionInstruction]:
         """The MotionInstructions of the calls found in pass 2, in program order.
 
         This runs once per move of a program, so it is written as one loop with
-        its tables in local variables.
+        its tables in local variables. A LazyCall's tail is read once per routine
+        (`_SharedTail`); its moves then only need their first argument's operand.
         """
-        source, module_names, name_operand, general = (
-            self.source, self.module_names_as_spelt, self._name_operand, self._operand)
-        name_ref, operand, role_types = s.NameRef, Operand, _ROLE_TYPES
+        source, module_names, operands = self.source, self.module_names_as_spelt, self._operands
+        name_ref, operand, lazy_call, role_types = s.NameRef, Operand, s.LazyCall, _ROLE_TYPES
+        motion = MotionInstruction
         # (instruction, module, routine) -> per required position: (parameter key,
-        # type hint, operand cache: data name as spelt -> what an Operand of it holds)
-        layouts: dict[tuple[str, str, str], tuple[tuple[str, str | None, dict], ...]] = {}
+        # type hint, operand cache: data name as spelt -> what an Operand of it holds),
+        # and id(call tail) -> what its moves share (None: nothing); the calls keep
+        # their tails alive while this runs, so an id is not reused
+        layouts: dict[tuple[str, str, str], tuple[_Layout, dict[int, _SharedTail | None]]] = {}
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
         for call, spec, module, routine, in_loop in self.pending:
             if spec is not last[0] or routine is not last[1] or module is not last[2]:
                 rkey = routine.lower()
-                roles = layouts.get((spec.name, module, rkey))
-                if roles is None:
-                    roles = layouts[(spec.name, module, rkey)] = tuple(
+                found = layouts.get((spec.name, module, rkey))
+                if found is None:
+                    found = layouts[(spec.name, module, rkey)] = (tuple(
                         (key, role_types.get(key),
                          caches.setdefault((module, rkey, role_types.get(key)), {}))
-                        for key in (p.lower() for p in spec.parameters))
+                        for key in (p.lower() for p in spec.parameters)), {})
+                layout, shared_tails = found
                 last = (spec, routine, module)
-                n_roles = len(roles)
-            arguments: dict[str, Operand] = {}
-            optional: dict[str, Operand] = {}
-            index = 0
-            for arg in call.args:
-                if arg.kind == "required":
-                    if arg.name is None and index < n_roles:
-                        key, hint, cache = roles[index]
+                _, head_hint, head_cache = layout[0] if layout else (None, None, None)
+            if type(call) is lazy_call:
+                tail = id(call.tail)
+                shared = shared_tails.get(tail, False)
+                if shared is False:  # the first call with this tail: made in full
+                    arguments, optional = operands(call, layout, module, rkey)
+                    shared = shared_tails[tail] = self._shared_tail(
+                        call, spec, layout, arguments, optional)
+                elif shared is not None:
+                    head = call.head
+                    expr = head.value
+                    if type(expr) is name_ref:
+                        name = expr.name
+                        cached = head_cache.get(name)
+                        if cached is None:
+                            cached = head_cache[name] = self._name_operand(
+                                expr, head_hint, module, rkey)
+                        target = operand(head, source, name, "name", name, *cached)
                     else:
-                        key = arg.name.lower() if arg.name is not None else f"#{index + 1}"
-                        hint = role_types.get(key)
-                        cache = caches.setdefault((module, rkey, hint), {})
-                    index += 1
-                    into = arguments
+                        target = self._operand(head, head_hint, module, rkey)
+                    motions.append(motion(call.name, spec, module_names[module], routine,
+                                          call, source, [target], in_loop, shared))
+                    continue
                 else:
-                    key = arg.key or ""
-                    hint = role_types.get(key)
-                    cache = caches.setdefault((module, rkey, hint), {})
-                    into = optional
-                expr = arg.value
-                if type(expr) is name_ref:
-                    # the same speed, zone, tool or target name recurs on many lines
-                    name = expr.name  # as spelt: no lower()
-                    cached = cache.get(name)
-                    if cached is None:
-                        cached = cache[name] = name_operand(expr, hint, module, rkey)
-                    # a name's text is its node's string, shared by every use of the name
-                    into[key] = operand(arg, source, name, "name", name, *cached)
-                else:
-                    into[key] = general(arg, hint, module, rkey)
-            motions.append(MotionInstruction(call.name, spec, module_names[module], routine,
-                                             call, source, arguments, optional, in_loop))
+                    arguments, optional = operands(call, layout, module, rkey)
+            else:
+                arguments, optional = operands(call, layout, module, rkey)
+            targets = [arguments[key] for key in spec.target_keys if key in arguments]
+            motions.append(motion(call.name, spec, module_names[module], routine, call,
+                                  source, targets, in_loop, shared if type(call) is lazy_call
+                                  else None, arguments, optional))
         return motions
 
     # ------------------------------------------------------------ all passes

@@ -9,7 +9,7 @@ rewrite exactly that text. Built by rapidfix.rapid.model_builder.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.instructions import MotionSpec
@@ -125,9 +125,27 @@ class Operand:
             return None
 
 
+class SharedOperands(Protocol):
+    """Makes the operands of motions that share everything but their targets."""
+
+    def operands(self, motion: MotionInstruction) -> tuple[dict[str, Operand],
+                                                          dict[str, Operand]]:
+        """(arguments, optional) of `motion`, its `targets` among them."""
+
+
 @dataclass(eq=False, slots=True)
 class MotionInstruction:
-    """A call of a motion instruction (MoveL, MoveAbsJ, TriggC, ...)."""
+    """A call of a motion instruction (MoveL, MoveAbsJ, TriggC, ...).
+
+    `arguments` (required parameters by lower-case spec name) and `optional`
+    (optional arguments by lower-case name) hold an Operand per argument;
+    `targets` the target operands among them, CirPoint before ToPoint.
+
+    `shared` is not None when the instruction's operands other than its targets
+    are those of every motion with the same `shared` object: the same text,
+    values, declarations and reasons (a CAM program's moves differ only in their
+    targets). Such motions make `arguments` and `optional` when first asked for.
+    """
 
     name: str
     spec: MotionSpec = field(repr=False)
@@ -135,9 +153,25 @@ class MotionInstruction:
     routine: str
     syntax: s.ProcedureCall = field(repr=False)
     source: SourceText = field(repr=False)
-    arguments: dict[str, Operand]  # required parameters by lower-case spec name
-    optional: dict[str, Operand]  # optional arguments by lower-case name
+    targets: list[Operand]
     in_loop: bool = False
+    shared: SharedOperands | None = field(default=None, repr=False)
+    _arguments: dict[str, Operand] | None = field(default=None, repr=False)
+    _optional: dict[str, Operand] | None = field(default=None, repr=False)
+
+    @property
+    def arguments(self) -> dict[str, Operand]:
+        """Required parameters by lower-case spec name."""
+        if self._arguments is None:
+            self._arguments, self._optional = self.shared.operands(self)
+        return self._arguments
+
+    @property
+    def optional(self) -> dict[str, Operand]:
+        """Optional arguments by lower-case name."""
+        if self._optional is None:
+            self._arguments, self._optional = self.shared.operands(self)
+        return self._optional
 
     @property
     def span(self) -> Span:
@@ -148,12 +182,6 @@ class MotionInstruction:
     def name_span(self) -> Span:
         start = self.syntax.start
         return Span(start, start + len(self.syntax.name), self.source)
-
-    @property
-    def targets(self) -> list[Operand]:
-        """Target operands in order (CirPoint before ToPoint)."""
-        arguments = self.arguments
-        return [arguments[key] for key in self.spec.target_keys if key in arguments]
 
     @property
     def target(self) -> Operand | None:

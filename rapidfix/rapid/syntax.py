@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from itertools import chain
+from typing import Protocol
 
 
 @dataclass(slots=True, eq=False)
@@ -140,6 +141,44 @@ class ProcedureCall(Statement):
     @property
     def key(self) -> str:
         return self.name.lower()
+
+
+class ArgumentTail(Protocol):
+    """Arguments that recur after many calls' first argument, read once (see LazyCall)."""
+
+    def arguments(self, shift: int) -> list[Argument]:
+        """The tail's Argument nodes with offsets moved by `shift`."""
+
+
+_CALL_ARGS = ProcedureCall.__dict__["args"]  # the slot, under the property below
+
+
+class LazyCall(ProcedureCall):
+    """A ProcedureCall whose arguments after the first are a shared `tail`, shifted
+    to where this call stands; its `args` are made when first asked for.
+
+    A CAM program's hundred thousand moves differ only in their first argument,
+    and most readers never look past it: the nodes of the rest are made on demand.
+    `args` is the same list of nodes a ProcedureCall holds (`head` first).
+    """
+
+    __slots__ = ("head", "shift", "tail")
+
+    def __init__(self, start: int, end: int, name: str, head: Argument | None,
+                 tail: ArgumentTail, shift: int) -> None:
+        self.start, self.end, self.name = start, end, name
+        self.head, self.tail, self.shift = head, tail, shift
+
+    @property  # type: ignore[override]
+    def args(self) -> list[Argument]:
+        try:
+            return _CALL_ARGS.__get__(self)
+        except AttributeError:
+            args = self.tail.arguments(self.shift)
+            if self.head is not None:
+                args.insert(0, self.head)
+            _CALL_ARGS.__set__(self, args)
+            return args
 
 
 @dataclass(slots=True, eq=False)

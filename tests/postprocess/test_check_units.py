@@ -17,7 +17,6 @@ import pytest
 from rapidfix.exceptions import RapidSemanticError
 from rapidfix.postprocess import rewrite as rewrite_module
 from rapidfix.postprocess import verify as verify_module
-from rapidfix.postprocess.resolve import motion_targets
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file, rewrite_source
 from rapidfix.postprocess.verify import parse_units, read_back_full
 from rapidfix.rapid import parse_program
@@ -82,7 +81,7 @@ def test_check_units_hold_every_change_and_read_back_what_the_output_commands(
         twin = check_motions.get(_text(after, motion))
         if twin is None:
             continue
-        for ours, theirs in zip(motion_targets(twin), motion_targets(motion), strict=True):
+        for ours, theirs in zip(twin.targets, motion.targets, strict=True):
             assert ours.value == theirs.value
             compared += 1
     assert compared >= len(captured["motions"])
@@ -111,7 +110,7 @@ def test_a_cam_program_is_read_back_in_bulk_with_the_values_the_model_reads(
     # and the joints are those the motions of the full parse name
     for ident, motion in enumerate(captured["motions"][:20]):
         row = np.flatnonzero(captured["expected"].motion == ident)[0]
-        assert motion_targets(motion)[0].value[0] == tuple(full.robax[row])
+        assert motion.targets[0].value[0] == tuple(full.robax[row])
 
 
 @pytest.mark.parametrize("text", [

@@ -304,15 +304,16 @@ def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell
     assert {0, 1, 4}.issubset(set(np.asarray(got_status).tolist()))
 
 
-def test_motion_targets_shortcut_matches_the_program_model(samples):
-    from rapidfix.postprocess.resolve import motion_targets
-
+def test_targets_are_the_target_operands_among_the_arguments(samples):
     count = 0
     for path in sorted(samples.iterdir()):
         if path.suffix.lower() not in (".mod", ".prg"):
             continue
         for motion in load_program(path).motions:
-            assert motion_targets(motion) == motion.targets
+            arguments = motion.arguments
+            want = [arguments[key] for key in motion.spec.target_keys if key in arguments]
+            assert len(motion.targets) == len(want)
+            assert all(a is b for a, b in zip(motion.targets, want))
             count += 1
     assert count > 50
 

@@ -202,7 +202,8 @@ def test_record_field_named_like_instruction_and_reserved_context():
 def test_label_on_its_own_line():
     program = parse_program(in_proc("  GOTO next;\nnext:\n  Stop;"))
     body = program.routines[0].syntax.body
-    assert [type(x).__name__ for x in body] == ["Goto", "Label", "ProcedureCall"]
+    assert [type(x).__name__ for x in body[:2]] == ["Goto", "Label"]
+    assert isinstance(body[2], s.ProcedureCall) and body[2].name == "Stop"
 
 
 @pytest.mark.parametrize("bad", [

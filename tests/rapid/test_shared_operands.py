@@ -1,0 +1,159 @@
+"""Moves that share their operands besides the targets (a CAM program's tails) get the
+same model as moves built one by one.
+
+Every comparison builds the program model twice from the same text: from the
+fast parser's tree (LazyCall nodes, shared tails) and from the plain grammar's
+tree (every argument a node, every operand made at once), and compares every
+motion's operands field by field, spans included.
+"""
+
+from __future__ import annotations
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fastpath import parse_text
+from rapidfix.rapid.grammar import rapid_parser
+from rapidfix.rapid.model_builder import build_program
+from rapidfix.rapid.program import Operand, Program
+from rapidfix.rapid.source import decode_source
+
+TARGET = "[[1,-2.5,3E2],[1,0,0,0],[0,-1,2,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+TOOL = "[TRUE,[[0,0,100],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]]"
+WOBJ = "[FALSE,TRUE,\"\",[[0,0,0],[1,0,0,0]],[[0,0,0],[1,0,0,0]]]"
+
+
+def describe(operand: Operand) -> tuple:
+    arg, decl = operand.argument, operand.declaration
+    return (arg.start, arg.end, arg.kind, arg.name, operand.text, operand.form,
+            operand.name, operand.type_name, operand.value, operand.static, operand.reason,
+            None if decl is None else (decl.module, decl.routine, decl.syntax.start))
+
+
+def model(program: Program) -> list[tuple]:
+    return [
+        (m.name, m.module, m.routine, m.in_loop, m.syntax.start, m.syntax.end,
+         [describe(t) for t in m.targets],
+         {k: describe(v) for k, v in m.arguments.items()},
+         {k: describe(v) for k, v in m.optional.items()},
+         [k for k in m.arguments], [k for k in m.optional])
+        for m in program.motions
+    ]
+
+
+def both(text: str) -> tuple[Program, Program]:
+    source = decode_source(text, "t.mod")
+    fast = build_program(source, text.encode(), parse_text(text))
+    plain = build_program(source, text.encode(), rapid_parser().parse(text))
+    return fast, plain
+
+
+def assert_same_model(text: str) -> Program:
+    fast, plain = both(text)
+    assert model(fast) == model(plain)
+    for motion in fast.motions:  # the targets are the very operands of the arguments
+        args = motion.arguments
+        assert all(any(t is a for a in args.values()) for t in motion.targets)
+    # moves with the same shared tail have equal operands besides their targets
+    seen: dict[int, tuple] = {}
+    for motion in fast.motions:
+        if motion.shared is None:
+            continue
+        rest = tuple((k, describe(v)[4:]) for k, v in
+                     [*motion.arguments.items(), *motion.optional.items()]
+                     if not any(v is t for t in motion.targets))
+        assert seen.setdefault(id(motion.shared), rest) == rest
+    return fast
+
+
+CELL = f"""MODULE Cell
+  PERS tooldata gun:={TOOL};
+  PERS wobjdata table:={WOBJ};
+  CONST robtarget p1:={TARGET};
+  CONST robtarget p2:={TARGET};
+  VAR robtarget moving:={TARGET};
+  PROC main()
+    MoveL p1,v100,z1,gun\\WObj:=table;
+    MoveL p2,v100,z1,gun\\WObj:=table;
+    MoveJ p1,v100,z1,gun\\WObj:=table;
+    MoveL p2,v100,z1,gun\\WObj:=table;
+    MoveL {TARGET},v100,z1,gun\\WObj:=table;
+    MoveL moving,v100,z1,gun\\WObj:=table;
+    MoveL nowhere,v100,z1,gun\\WObj:=table;
+    MoveL \\Conc,p1,v100,fine,gun;
+    MoveL p1,v100,z1,gun\\Conc;
+    MoveL p2,v100,z1,gun\\Conc;
+    MoveL p1,v100,z1,gun\\T:=2;
+    MoveL p2,v100,z1,gun\\T:=2;
+    MoveC p1,p2,v100,z1,gun;
+    MoveC p2,p2,v100,z1,gun;
+    MoveAbsJ [[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],v100,z1,gun;
+    FOR i FROM 1 TO 3 DO
+      MoveL p1,v100,z1,gun\\WObj:=table;
+    ENDFOR
+    moving.trans.x:=1;
+  ENDPROC
+  PROC other()
+    VAR tooldata gun:={TOOL};
+    MoveL p1,v100,z1,gun\\WObj:=table;
+    MoveL p2,v100,z1,gun\\WObj:=table;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_a_cell_program_builds_the_same_model_from_shared_tails():
+    program = assert_same_model(CELL)
+    shared = [m for m in program.motions if m.shared is not None]
+    assert len(shared) > 10  # the tails were shared, not all built one by one
+    main = [m for m in shared if m.routine == "main" and "wobj" in m.optional]
+    other = [m for m in shared if m.routine == "other"]
+    # the same tail text in another routine names another tool (a local one)
+    assert main[0].shared is not other[0].shared
+    assert main[0].tool.declaration is not other[0].tool.declaration
+
+
+def test_asking_for_the_arguments_makes_them_once():
+    fast, _ = both(CELL)
+    motion = next(m for m in fast.motions if m.shared is not None and m._arguments is None)
+    assert motion.arguments is motion.arguments and motion.optional is motion.optional
+    assert motion.syntax.args[0] is motion.targets[0].argument
+
+
+MOVES = [
+    "MoveL p1,v100,z1,gun\\WObj:=table;",
+    "MoveL p2,v100,z1,gun\\WObj:=table;",
+    "MoveJ p1,v100,z1,gun\\WObj:=table;",
+    "MoveL p1,v100,z1,gun;",
+    "MoveL p2, v100, z1, gun;",
+    "MoveL undeclared,v100,z1,gun;",
+    "MoveL p1,v100,z1,gun\\Conc;",
+    "MoveL p1,v100,z1,gun\\T:=2;",
+    "MoveL p2,v100,z1,gun\\T:=2;",
+    f"MoveL {TARGET},v100,z1,gun;",
+    "MoveC p1,p2,v100,z1,gun;",
+    "MoveL p1,v100,z1,gun\\TLoad:=load0;",
+    "SetDO do1, 1;",
+    "gun.tframe.trans.z:=1;",
+]
+
+
+@st.composite
+def cam_program(draw: st.DrawFn) -> str:
+    routines = []
+    for r in range(draw(st.integers(1, 3))):
+        local = draw(st.sampled_from(["", f"    VAR tooldata gun:={TOOL};\n"]))
+        body = draw(st.lists(st.sampled_from(MOVES), min_size=1, max_size=12))
+        routines.append(f"  PROC r{r}()\n{local}" + "".join(f"    {b}\n" for b in body)
+                        + "  ENDPROC\n")
+    return (f"MODULE M\n  PERS tooldata gun:={TOOL};\n  PERS wobjdata table:={WOBJ};\n"
+            f"  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n"
+            + "".join(routines) + "ENDMODULE\n")
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cam_program())
+def test_random_cam_programs_build_the_same_model(text):
+    program = assert_same_model(text)
+    assert all(isinstance(m.syntax, s.LazyCall) for m in program.motions)
