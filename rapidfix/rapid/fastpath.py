@@ -321,6 +321,15 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     return calls
 
 
+def _first_group(text: str) -> tuple[float, ...]:
+    """_number_group for a leading group (a position): not kept in the cache, as a
+    CAM program's positions rarely recur."""
+    try:
+        return tuple(map(float, text.split(",")))
+    except ValueError:
+        raise NotFast(text) from None
+
+
 def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
     """aggregate_value(text), reading what follows a leading group once per distinct text.
 
@@ -334,17 +343,22 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
             items = rests.get(rest)
             if items is None:
                 items = aggregate_value("[[0]" + rest)[1:]  # the same items after any group
-                if len(rests) < _TAIL_LIMIT:
-                    rests[rest] = items
-            first = text[2:cut]
-            return (_GROUP_CACHE.get(first) or _number_group(first), *items)
+                if len(rests) >= _TAIL_LIMIT:
+                    rests.clear()
+                rests[rest] = items
+            return (_first_group(text[2:cut]), *items)
     return aggregate_value(text)
+
+
+# What follows the leading group of an aggregate, read once (see shared_aggregate_value);
+# kept across tokens and files like the call tails.
+_RESTS: dict[str, tuple] = {}
 
 
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
     """The DataDecl nodes of a FAST_DECLS token starting at offset `base`."""
     decls: list[s.DataDecl] = []
-    rests: dict[str, tuple] = {}
+    rests = _RESTS
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
         local, task, storage, type_name, name, value = m.groups()
@@ -359,7 +373,7 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
         first = 1 if local is not None else 2 if task is not None else 3
         decls.append(data_decl(
             base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
-            name, base + spans[5][0], [], init, local is not None, task is not None,
+            name, base + spans[5][0], (), init, local is not None, task is not None,
         ))
     return decls
 

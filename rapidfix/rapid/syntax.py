@@ -8,7 +8,7 @@ case-folded form RAPID compares by.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import chain
 from typing import Protocol
@@ -300,7 +300,7 @@ class DataDecl(Node):
     type_name: str
     name: str
     name_start: int
-    dims: list[Expr]
+    dims: Sequence[Expr]  # () when there are none
     init: Expr | None
     local: bool = False
     task: bool = False
