@@ -1,12 +1,14 @@
 """RAPID literals for many targets at once, written the way rapidfix.rapid.format writes one.
 
 A CAM program has a hundred thousand targets: each jointtarget is formatted
-with one C-level `%` operation and the trailing zeros of the whole block are
-cut by a few plain replacements, which gives exactly the text
+with one C-level `%` operation for the whole block, whose trailing zeros are
+then cut by one regular-expression pass, which gives exactly the text
 `rapidfix.rapid.format.format_jointtarget` gives for each (tests compare them).
 """
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
@@ -16,18 +18,20 @@ from rapidfix.rapid.format import format_num, format_robtarget
 _JOINTS = "[[" + ",".join(["%.6f"] * 6) + "],"
 
 
+# Trailing zeros of a fraction and then its '.', before the ',' or ']' that ends the number.
+_TRAILING = re.compile(r"\.?0+(?=[,\]])")
+
+
 def _trim(text: str) -> str:
     """Trailing zeros and dots cut from numbers written with `%.6f`, each followed by
     ',' or ']'; '-0' written '0'.
 
-    Every number has exactly six decimals, so six passes take every trailing zero of
-    the fractions and none of an integer part (the '.' still stands before it). A
-    '-' stands only at the start of a number, so '-0.000000' is a negative zero.
+    Every number has exactly six decimals, so its last '0' before ',' or ']' is a
+    fraction's: the zeros cut (and the '.' when all six go) never reach an integer
+    part, whose digits stand before the '.'. A '-' stands only at the start of a
+    number, so '-0.000000' is a negative zero.
     """
-    text = text.replace("-0.000000", "0.000000")
-    for _ in range(6):
-        text = text.replace("0,", ",").replace("0]", "]")
-    return text.replace(".,", ",").replace(".]", "]")
+    return _TRAILING.sub("", text.replace("-0.000000", "0.000000"))
 
 
 def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
@@ -43,8 +47,10 @@ def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
     if q_deg.size and not np.abs(q_deg).max() < 1e8:  # not finite, or written with E
         joints = ["[[" + ",".join(format_num(v) for v in row) + "]," for row in q_deg.tolist()]
         return [j + e for j, e in zip(joints, ext_text)]
-    joints = [_JOINTS % tuple(row) for row in q_deg.tolist()]
-    block = _trim("\n".join(joints)).split("\n") if joints else []
+    # one C-level formatting of every number, one trim of the whole block
+    rows = len(q_deg)
+    block = _trim("\n".join([_JOINTS] * rows) % tuple(q_deg.ravel().tolist())).split("\n") \
+        if rows else []
     return [j + e for j, e in zip(block, ext_text)]
 
 

@@ -321,7 +321,8 @@ def test_targets_are_the_target_operands_among_the_arguments(samples):
 joint_values = st.one_of(
     st.floats(-400, 400, allow_nan=False),
     st.sampled_from([0.0, -0.0, -4e-7, 4e-7, -5e-7, 5e-7, 1e-6, -1e-6, 10.0, -100.0, 12.5,
-                     0.0000105, 359.9999996, -179.9999995, 1e8, -3e9]),
+                     0.0000105, 359.9999996, -179.9999995, 100.0, -1000.0, 1e7, 20.5, -0.1,
+                     1e8, -3e9]),
 )
 
 
