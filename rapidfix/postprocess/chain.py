@@ -11,15 +11,16 @@ previous iteration); the rewrite treats it accordingly.
 
 from __future__ import annotations
 
-from rapidfix.rapid import MotionInstruction, Program
+from rapidfix.rapid import Program
 from rapidfix.rapid import syntax as s
 
 
-def predecessors(program: Program) -> dict[int, MotionInstruction | None]:
-    """id(motion.syntax) -> the motion instruction executed just before it, or None."""
-    by_call = {id(m.syntax): m for m in program.motions}
+def predecessors(program: Program) -> list[int]:
+    """Per motion of `program.motions`: the index of the motion instruction executed
+    just before it, or -1 when that is not known before run time."""
+    index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
     user_routines = {r.name.lower() for r in program.routines}
-    result: dict[int, MotionInstruction | None] = {}
+    result = [-1] * len(program.motions)
     stack: list[list[s.Statement]] = []
     for module in program.syntax.modules:
         for item in module.items:
@@ -27,20 +28,20 @@ def predecessors(program: Program) -> dict[int, MotionInstruction | None]:
                 stack.append(item.body)
                 stack.extend(h.body for h in item.handlers)
     while stack:
-        previous: MotionInstruction | None = None
+        previous = -1
         for statement in stack.pop():
-            motion = by_call.get(id(statement))
-            if motion is not None:
-                result[id(statement)] = previous
-                previous = motion
+            k = index_of.get(id(statement))
+            if k is not None:
+                result[k] = previous
+                previous = k
                 continue
             nested = list(statement.bodies())
             if nested:
                 stack.extend(nested)
-                previous = None
+                previous = -1
             elif isinstance(statement, s.ProcedureCall):
                 if statement.key in user_routines:
-                    previous = None
+                    previous = -1
             elif not isinstance(statement, s.Assignment):
-                previous = None
+                previous = -1
     return result

@@ -34,7 +34,8 @@ class Site:
 
     `kind` 'L', 'J', 'C' (linear, joint, circular path) or 'X' (another instruction,
     kept, only its robtargets filtered); `rows` its target rows (CirPoint first);
-    `reason` why it is left as it was (None when it is compensated).
+    `reason` why it is left as it was (None when it is compensated); `index` the
+    motion's place in `Program.motions`.
     """
 
     motion: MotionInstruction
@@ -42,6 +43,7 @@ class Site:
     targets: list[Operand] = field(default_factory=list)
     rows: list[int] = field(default_factory=list)
     reason: str | None = None
+    index: int = -1
 
     @property
     def where(self) -> str:
@@ -253,7 +255,7 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
     by_tail: dict[Any, tuple[str | None, tuple]] = {}
-    for motion in program.motions:
+    for index, motion in enumerate(program.motions):
         info = kinds.get(motion.name)
         if info is None:
             info = kinds[motion.name] = _instruction_kind(motion, emit)
@@ -273,7 +275,7 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         option_reason, key = around
         if reason is None and emit == "jointtargets":
             reason = option_reason
-        site = Site(motion, kind, site_ops, reason=reason)
+        site = Site(motion, kind, site_ops, reason=reason, index=index)
         sites.append(site)
         if reason is not None:
             continue

@@ -265,43 +265,43 @@ class _Rewriter:
         """Start of every linear/circular move, and intermediate points within the tolerance."""
         if self.options.emit != "jointtargets":
             return
-        site_of = {id(s.motion.syntax): i for i, s in enumerate(self.sites)}
-        before = predecessors(self.program)
-        mode, sites = self.mode, self.sites
-        segs: list[int] = []
-        to_rows: list[int] = []
-        via_rows: list[int] = []
-        circular_sites: list[bool] = []
-        start_rows: list[int] = []  # per segment: the row it starts at, or -1 ...
-        absj: dict[int, np.ndarray] = {}  # ... and then the joints of a MoveAbsJ it follows
-        for i, site in enumerate(sites):
-            if site.kind not in "LC" or mode.get(i) != "joint":
-                continue
-            previous = before.get(id(site.motion.syntax))
-            index = None if previous is None else site_of.get(id(previous.syntax))
-            if index is not None:
-                if index not in mode:
-                    mode[i] = "filtered"
-                    continue
-                start_rows.append(sites[index].rows[-1])
-            else:
-                start = self._start_state(previous)
-                if start is None:
-                    mode[i] = "filtered"
-                    continue
-                absj[len(segs)] = start[0]
-                start_rows.append(-1)
-            segs.append(i)
-            to_rows.append(site.rows[-1])
-            via_rows.append(site.rows[0])
-            circular_sites.append(site.kind == "C")
+        mode, sites, motions = self.mode, self.sites, self.program.motions
+        n = len(sites)
+        site_motion = np.fromiter((site.index for site in sites), dtype=np.int64, count=n)
+        site_of_motion = np.full(len(motions) + 1, -1, dtype=np.int64)  # [-1]: no motion
+        site_of_motion[site_motion] = np.arange(n)
+        compensated = np.zeros(n, dtype=bool)
+        compensated[list(mode)] = True
+        last_row = np.fromiter((site.rows[-1] if site.rows else -1 for site in sites),
+                               dtype=np.int64, count=n)
+        moves = np.array(sorted(i for i, m in mode.items()
+                                if m == "joint" and sites[i].kind in "LC"), dtype=np.int64)
+        previous = np.asarray(predecessors(self.program), dtype=np.int64)[site_motion[moves]]
+        after = site_of_motion[previous]  # the site of the motion before, or -1
+        # a move after another compensated site starts where that one ends; one after an
+        # instruction that is not a site (a MoveAbsJ) may start at its joints
+        keep = (after >= 0) & compensated[np.maximum(after, 0)]
+        start_rows = np.where(keep, last_row[np.maximum(after, 0)], -1)
+        starts: dict[int, np.ndarray] = {}  # site -> the joints of the MoveAbsJ it follows
+        for k in np.flatnonzero(after < 0).tolist():
+            start = self._start_state(motions[previous[k]] if previous[k] >= 0 else None)
+            if start is not None:
+                keep[k] = True
+                starts[int(moves[k])] = start[0]
+        for i in moves[~keep].tolist():
+            mode[i] = "filtered"
+        segs = moves[keep].tolist()
+        from_row = start_rows[keep]
+        absj = {k: starts[i] for k, i in enumerate(segs) if i in starts}
+        to_rows = [sites[i].rows[-1] for i in segs]
+        via_rows = [sites[i].rows[0] for i in segs]
+        circular_sites = [sites[i].kind == "C" for i in segs]
         self.refined_sites = segs
         if not segs:
             return
         t, p = self.targets, self.plan_
         to_row, via_row = np.array(to_rows), np.array(via_rows)
         circular = np.array(circular_sites, dtype=bool)
-        from_row = np.array(start_rows)
         q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
         start_flange = p.flange[from_row]  # the previous target's intended tool0 pose
         if absj:
