@@ -153,3 +153,23 @@ def test_compact_count_for_wide_turn_masks():
     # θ6 = 60° + k·360° for k = −5 … 4 is inside ±1800°: 10 variants in the source branch
     in_branch = sols.valid[0] & (np.abs(sols.q[0, :, :5] - q[0, :5]).max(axis=1) < 1e-9)
     assert in_branch.sum() == 10
+
+
+def test_prepare_solves_once_ahead_only_where_the_compiled_kernel_will_run(monkeypatch):
+    from rapidfix.kinematics import ik
+
+    robot = load_robot("IRB120-3/0.58")
+    ik.prepare(robot)  # the real thing, in whichever environment this runs
+    calls = []
+    monkeypatch.setattr(ik, "solve_all", lambda model, T, **kw: calls.append((model, T)))
+    for backend in ("numpy", "auto"):
+        monkeypatch.setenv(BACKEND_ENV, backend)
+        calls.clear()
+        ik.prepare(robot)
+        if backend == "auto" and accelerated():
+            (model, T), = calls
+            assert model is robot and T.shape == (1, 4, 4) and T.flags.writeable
+            assert np.array_equal(T[0], robot.home)
+        else:
+            assert calls == []
+

@@ -464,3 +464,13 @@ def test_the_written_out_moveabsj_is_the_statement_the_general_edits_make():
                 assert _joint_statement(program.text, site, "jt_x") == general
                 checked += 1
     assert checked > 20
+
+
+def test_loading_a_compensator_prepares_its_robot(cell, monkeypatch):
+    """The compiled IK kernel's one-time load happens with the model, not in a rewrite."""
+    from rapidfix.postprocess import compensator
+
+    prepared = []
+    monkeypatch.setattr(compensator, "prepare", prepared.append)
+    comp = compensator.Compensator.load(cell["model_path"])
+    assert prepared == [comp.robot]
