@@ -35,6 +35,7 @@ from rapidfix.rapid.fastpath import (
     _WS,
     FastSyntaxBuilder,
     NotFast,
+    declaration_pattern,
     grammar_extension,
 )
 from rapidfix.rapid.grammar import grammar_text
@@ -69,13 +70,9 @@ def run_parser() -> Lark:
                 transformer=_RunBuilder(), cache=True)
 
 
-# A declaration whose syntax the lexer has checked: its type, name and value text
-# (the storage and LOCAL / TASK are not needed to read values back).
-_BULK_DECL = re.compile(
-    rf"{_WS}*(?:(?i:LOCAL){_WS}+)?(?:(?i:TASK){_WS}+)?(?i:VAR|PERS|CONST){_WS}+"
-    rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
-    rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
-)
+# A declaration's type, name and value text (the storage and LOCAL / TASK are not
+# needed to read values back).
+_BULK_DECL = declaration_pattern(False)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
 _BULK_CALL = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")

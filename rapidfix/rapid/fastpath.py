@@ -149,26 +149,39 @@ _CALL_PIECE = re.compile(
     rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_VALUE_TEXT}))?"
     rf"|({_VALUE_TEXT})|(;))"
 )
-_DECL = re.compile(
-    rf"{_WS}*(?:(?i:(LOCAL)){_WS}+)?(?:(?i:(TASK)){_WS}+)?((?i:VAR|PERS|CONST)){_WS}+"
-    rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
-    rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
-)
+
+
+def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
+    """Splits a declaration whose syntax has been checked: (LOCAL, TASK, storage,) type,
+    name and value text; the first three groups only with `modifiers`."""
+    def group(pattern: str) -> str:
+        return f"({pattern})" if modifiers else pattern
+
+    return re.compile(
+        rf"{_WS}*(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
+        rf"{group('(?i:VAR|PERS|CONST)')}{_WS}+"
+        rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
+        rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
+    )
+
+
+_DECL = declaration_pattern(True)
 
 # Groups of numbers recur in CAM programs ([0,0,0,0], [9E+09,...]); read each once.
 _GROUP_CACHE: dict[str, tuple[float, ...]] = {}
 _GROUP_CACHE_LIMIT = 65536
 
 
-def _number_group(text: str) -> tuple[float, ...]:
-    """'1,-2.5,9E+09' -> (1.0, -2.5, 9e9). The loose lexer pattern let through only
-    the characters -+0-9.eE, and of such strings float() takes exactly those that
-    RAPID's number syntax takes; anything else raises NotFast."""
+def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
+    """'1,-2.5,9E+09' -> (1.0, -2.5, 9e9), kept in the cache unless `keep` is False.
+    The loose lexer pattern let through only the characters -+0-9.eE, and of such
+    strings float() takes exactly those that RAPID's number syntax takes; anything
+    else raises NotFast."""
     try:
         value = tuple(map(float, text.split(",")))
     except ValueError:
         raise NotFast(text) from None
-    if len(_GROUP_CACHE) < _GROUP_CACHE_LIMIT:
+    if keep and len(_GROUP_CACHE) < _GROUP_CACHE_LIMIT:
         _GROUP_CACHE[text] = value
     return value
 
@@ -251,21 +264,12 @@ def _tail(text: str) -> tuple[_TailArgument, ...]:
 class CallTail:
     """The arguments after a call's name or first argument, read once per distinct
     text and made into nodes for every call that ends with that text
-    (rapidfix.rapid.syntax.LazyCall).
+    (rapidfix.rapid.syntax.LazyCall)."""
 
-    `pieces` describes them for readers that need no nodes: per argument its kind
-    ('required' or 'optional'), its optional name (None for a required one) and its
-    value: the data name for a plain name, '' for none (a switch), None for a
-    number or an aggregate.
-    """
-
-    __slots__ = ("entries", "pieces")
+    __slots__ = ("entries",)
 
     def __init__(self, text: str) -> None:
         self.entries = _tail(text)
-        self.pieces = tuple(
-            (kind, option, "" if node is None else fields[0] if node is s.NameRef else None)
-            for kind, _, _, option, node, _, _, fields in self.entries)
 
     def arguments(self, shift: int) -> list[s.Argument]:
         """The Argument nodes of the tail standing at offset `shift`."""
@@ -321,15 +325,6 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     return calls
 
 
-def _first_group(text: str) -> tuple[float, ...]:
-    """_number_group for a leading group (a position): not kept in the cache, as a
-    CAM program's positions rarely recur."""
-    try:
-        return tuple(map(float, text.split(",")))
-    except ValueError:
-        raise NotFast(text) from None
-
-
 def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
     """aggregate_value(text), reading what follows a leading group once per distinct text.
 
@@ -346,7 +341,8 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
                 if len(rests) >= _TAIL_LIMIT:
                     rests.clear()
                 rests[rest] = items
-            return (_first_group(text[2:cut]), *items)
+            # a CAM program's positions rarely recur: not worth keeping
+            return (_number_group(text[2:cut], keep=False), *items)
     return aggregate_value(text)
 
 

@@ -438,10 +438,12 @@ class ModelBuilder:
             return None
         entries = []
         index = 1
-        for (kind, _, value), arg in zip(call.tail.pieces, call.args[1:]):
-            if value is None:
+        for arg in call.args[1:]:
+            # data names, and switches (optional arguments without a value)
+            if type(arg.value) is not s.NameRef and not (
+                    arg.value is None and arg.kind == "optional"):
                 return None
-            if kind == "required":
+            if arg.kind == "required":
                 key = layout[index][0] if index < len(layout) else f"#{index + 1}"
                 if key in spec.target_keys:
                     return None
