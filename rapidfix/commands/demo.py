@@ -123,7 +123,15 @@ def run(args: argparse.Namespace) -> int:
     # closing the loop: a robot with a hidden effect, its per-joint fit, the diagnosis
     from rapidfix.diagnose.demo import demo_loop, format_demo
 
-    print(format_demo(demo_loop(out / "diagnosis", seed=args.seed)))
+    loop = demo_loop(out / "diagnosis", seed=args.seed)
+    print(format_demo(loop))
+    # the loop on the robot: a cell program rewritten with each model, run as it executes
+    from rapidfix.postprocess.closed_loop import demo_on_robot, format_on_robot
+
+    models = {"per-joint model": loop["files"]["per_joint_model"],
+              "diagnosed model": loop["files"]["model"]}
+    print(format_on_robot(demo_on_robot(out / "diagnosis" / "measurements", models,
+                                        out / "diagnosis" / "programs", args.seed)))
     for text in warned:
         print(f"rapidfix: warning: {text}", file=sys.stderr)
     return 3 if warned else 0

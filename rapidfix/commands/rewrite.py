@@ -36,6 +36,10 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
                         help="rewrite a program that is already compensated")
     parser.add_argument("--in-place", action="store_true",
                         help="overwrite the input (a backup is kept beside it)")
+    parser.add_argument("--temperature", type=float, metavar="C",
+                        help="cell temperature (°C) the program will run at; needed by a "
+                        "model with thermal drift (recorded in the header; without it the "
+                        "calibration's reference is assumed and the exit status is 3)")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -62,6 +66,7 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
         path_tolerance_mm=args.path_tolerance,
         strict=args.strict,
         force=args.force,
+        temperature_c=args.temperature,
     )
 
 
@@ -86,8 +91,10 @@ def run(args: argparse.Namespace) -> int:
         print(line)
     for skipped in result.skipped:
         print(f"warning: {skipped}", file=sys.stderr)
+    for warning in result.warnings:
+        print(f"rapidfix: warning: {warning}", file=sys.stderr)
     if result.skipped and options.strict:
         print(f"rapidfix: error: {len(result.skipped)} target(s) cannot be compensated "
               "(--strict): nothing written", file=sys.stderr)
         return 1
-    return 3 if result.skipped else 0
+    return 3 if result.skipped or result.warnings else 0

@@ -46,7 +46,8 @@ def demo_loop(out_dir: str | Path, *, seed: int = 1, effect: str = DEFAULT_EFFEC
         "validation_mean_after_mm": final.validation.mean_mm,
         "noise_floor_mm": sel.floor_mm,
         "statement": result.statement,
-        "files": {k: str(v) for k, v in result.files.items()},
+        "files": {"per_joint_model": str(per_joint),
+                  **{k: str(v) for k, v in result.files.items()}},
     }
 
 

@@ -4,10 +4,13 @@ Per-joint models (every effect separable, no geometry change): each joint solves
 θc + Δθ(θc) = θ_ideal on its own by Newton's method with the analytic derivative
 (a fixed-point step where 1 + Δθ' is too small), vectorised over all poses.
 
-Any other model: the general solve finds θc with actual_tcp(θc) = T_target, the
-pose the nominal robot reaches at θ_ideal, by damped least squares (Newton) on the
-full forward model, seeded by θ_ideal − Δθ(θ_ideal). New effects are compensated
-by this solve without new code. Tolerance: 1e-9° on every joint step.
+Any other model: the general solve finds θc with actual_flange(θc) = T(θ_ideal),
+the tool0 pose the nominal robot reaches at θ_ideal, by damped least squares
+(Newton) on the full forward model, seeded by θ_ideal − Δθ(θ_ideal). Matching
+tool0's whole pose matches every rigid tool's TCP too, so no tool enters the
+solve. New effects are compensated by this solve without new code. Effects that
+describe the measurement (tracker frame and scale, target-ball offset) never act
+on tool0 and so are not compensated. Tolerance: 1e-9° on every joint step.
 
 Poses that do not converge are reported per pose (`CompensationResult.converged`);
 their last iterate is returned, never NaN. `compensate()` raises ModelError
@@ -83,8 +86,10 @@ def solve_per_joint(
     three times faster than one pass over a whole program, with the same answers.
     """
     target = _ideal(q_ideal)
-    ctx = EMPTY if ctx is None else ctx
     n = target.shape[0]
+    ctx = EMPTY if ctx is None else ctx
+    ctx.check_rows(n)
+    ctx = ctx.with_directions(target)
     q_cmd = np.empty_like(target)
     step = np.empty_like(target)
     iterations = 0
@@ -134,32 +139,44 @@ def solve_general(
     q_ideal: np.ndarray,
     ctx: Context | None = None,
     *,
-    tool: np.ndarray | None = None,
     tol_deg: float = TOL_DEG,
     max_iter: int = _MAX_ITER,
 ) -> CompensationResult:
-    """Damped Newton on the full forward model: actual_tcp(θc) = nominal TCP at θ_ideal."""
+    """Damped Newton on the full forward model: actual tool0 at θc = nominal tool0 at θ_ideal.
+
+    Matching tool0's whole pose matches the pose of every rigid tool on it, so one
+    solve serves any mix of tools and work objects. Each row is solved on its own
+    (rows that have converged are left alone); the context is taken row by row
+    with them, after the motion directions have been fixed over all rows.
+    """
     q_ideal = _ideal(q_ideal)
+    n = q_ideal.shape[0]
     ctx = EMPTY if ctx is None else ctx
+    ctx.check_rows(n)
+    ctx = ctx.with_directions(q_ideal)
     tol = np.radians(tol_deg)
-    declared = np.eye(4) if tool is None else np.asarray(tool, dtype=float)
-    target = robot.fk(q_ideal) @ declared
+    target = robot.fk(q_ideal)
     q = q_ideal - model.delta(q_ideal, ctx)  # the per-joint answer: a close seed
     scale = np.array([1.0, 1.0, 1.0] + [1.0 / _LENGTH_SCALE_MM] * 3)
-    step = np.full(q.shape[0], np.inf)
+    step = np.full(n, np.inf)
     iterations = 0
     eye = np.eye(6)
     while iterations < max_iter and np.any(step > tol):
         iterations += 1
         active = np.flatnonzero(step > tol)  # converged poses are left alone
-        sub_ctx = ctx.take(active)
-        current, jac = model.actual_tcp(robot, q[active], sub_ctx, declared, with_jacobian=True)
+        sub_ctx = ctx if active.size == n else ctx.take(active)
+        current, jac = model.flange_and_jacobian(robot, q[active], sub_ctx)
         err = _pose_error(target[active], current) * scale
         a = jac * scale[None, :, None]
         at = np.swapaxes(a, 1, 2)
         dq = np.linalg.solve(at @ a + _DAMPING * eye, (at @ err[:, :, None]))[:, :, 0]
+        finite = np.isfinite(dq).all(axis=1)
+        dq[~finite] = 0.0
         q[active] += dq
-        step[active] = np.abs(dq).max(axis=1)
+        step[active] = np.where(finite, np.abs(dq).max(axis=1), np.nan)
+        if not finite.all():  # a singular Jacobian: report the row, never iterate on NaN
+            step[active[~finite]] = np.inf
+            break
     converged = step <= tol
     return CompensationResult(q, converged, np.degrees(step), "general", iterations)
 
@@ -170,14 +187,13 @@ def solve_compensation(
     q_ideal: np.ndarray,
     ctx: Context | None = None,
     *,
-    tool: np.ndarray | None = None,
     tol_deg: float = TOL_DEG,
 ) -> CompensationResult:
     """Per-joint solve when the model allows it, else the general solve; status per pose."""
     model.check_robot(robot.name)
     if model.separable:
         return solve_per_joint(model, q_ideal, ctx, tol_deg=tol_deg)
-    return solve_general(model, robot, q_ideal, ctx, tool=tool, tol_deg=tol_deg)
+    return solve_general(model, robot, q_ideal, ctx, tol_deg=tol_deg)
 
 
 def compensate(
@@ -185,11 +201,9 @@ def compensate(
     robot: Any,
     q_ideal: np.ndarray,
     ctx: Context | None = None,
-    *,
-    tool: np.ndarray | None = None,
 ) -> np.ndarray:
     """Commanded joints (N, 6) rad; ModelError listing the rows that did not converge."""
-    result = solve_compensation(model, robot, q_ideal, ctx, tool=tool)
+    result = solve_compensation(model, robot, q_ideal, ctx)
     failed = result.failed_rows
     if failed.size:
         raise ModelError(

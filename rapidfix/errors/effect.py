@@ -83,9 +83,10 @@ class Geometry:
     axis_dirs:   (6, 3) or (N, 6, 3), unit joint axes at θ = 0;
     axis_points: (6, 3) or (N, 6, 3), a point on each axis, mm;
     home:   (4, 4) or (N, 4, 4), tool0 pose at θ = 0;
-    tool:   (4, 4) or (N, 4, 4), correction applied after the declared tool /
-            target-ball offset, in that TCP's frame (identity = the declaration is
-            right; for a target ball the TCP frame is parallel to the flange);
+    tool:   (4, 4) or (N, 4, 4), correction applied after the declared target-ball
+            offset, in that ball's frame (parallel to the flange; identity = the
+            declaration is right); like `world` it describes the measurement and is
+            used only when predicting measurements, never when compensating;
     world:  (4, 4) or (N, 4, 4), base frame → measurement (tracker) frame, used only
             when predicting measurements, never when compensating.
     """
@@ -132,6 +133,9 @@ class Effect:
     #: contributes joint errors / changes geometry (lets the forward model skip work)
     adds_joint_delta: ClassVar[bool] = False
     changes_geometry: ClassVar[bool] = False
+    #: describes the measurement, not the robot (the tracker's pose or scale, where the
+    #: target ball sits): fitted with the data, never applied to a program's moves
+    measurement_only: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -179,6 +183,10 @@ class Effect:
     def apply_geometry(self, geometry: Geometry, q_cmd: np.ndarray, ctx: Context) -> Geometry:
         """The geometry with this effect applied (unchanged by default)."""
         return geometry
+
+    def context_fields(self) -> frozenset[str]:
+        """The `Context` fields this effect reads (what a rewrite must know or assume)."""
+        return frozenset()
 
     # -- serialisation ----------------------------------------------------------
     def _state(self) -> dict[str, Any]:

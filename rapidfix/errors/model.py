@@ -62,9 +62,30 @@ class ErrorModel:
                          hint=f"it has: {', '.join(e.name for e in self.effects) or 'none'}")
 
     @property
+    def robot_effects(self) -> list[Effect]:
+        """The effects of the robot itself: all but those describing the measurement."""
+        return [e for e in self.effects if not e.measurement_only]
+
+    @property
     def separable(self) -> bool:
-        """True when every effect is a per-joint error (compensation joint by joint)."""
-        return all(e.separable and not e.changes_geometry for e in self.effects)
+        """True when every robot effect is a per-joint error (compensation joint by joint)."""
+        return all(e.separable and not e.changes_geometry for e in self.robot_effects)
+
+    def play(self) -> np.ndarray:
+        """Total play (6,) rad of the direction-dependent effects that have one (backlash)."""
+        out = np.zeros(6)
+        for eff in self.robot_effects:
+            play = getattr(eff, "play", None)
+            if callable(play):
+                out += np.asarray(play(), dtype=float)
+        return out
+
+    def context_fields(self) -> frozenset[str]:
+        """The context fields the robot effects read (payload, temperature, direction …)."""
+        out: frozenset[str] = frozenset()
+        for eff in self.robot_effects:
+            out |= eff.context_fields()
+        return out
 
     def check_robot(self, robot_name: str) -> None:
         """Refuse to use the model on another robot type."""
@@ -135,8 +156,21 @@ class ErrorModel:
     def actual_flange(
         self, robot: Any, q_cmd: np.ndarray, ctx: Context | None = None
     ) -> np.ndarray:
-        """Where tool0 really is (N, 4, 4) in the base frame when q_cmd (N, 6) rad is commanded."""
+        """Where tool0 really is (N, 4, 4) in the base frame when q_cmd (N, 6) rad is commanded.
+
+        Only the robot's own effects act here: the measurement's (tracker frame and
+        scale, target-ball offset) change `Geometry.world` and `Geometry.tool`, which
+        tool0 never passes through.
+        """
         return self._forward(robot, q_cmd, ctx)[0]
+
+    def flange_and_jacobian(
+        self, robot: Any, q_cmd: np.ndarray, ctx: Context | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """`actual_flange` and its approximate space Jacobian (N, 6, 6) with respect to
+        the commanded joints (see `actual_tcp`)."""
+        T, jac, _ = self._forward(robot, q_cmd, ctx, with_jacobian=True)
+        return T, jac * (1.0 + self.delta_derivative(q_cmd, ctx))[:, None, :]
 
     def actual_tcp(
         self,
@@ -147,7 +181,9 @@ class ErrorModel:
         *,
         with_jacobian: bool = False,
     ) -> tuple[np.ndarray, np.ndarray | None]:
-        """TCP poses (N, 4, 4) in the base frame for a declared tool (4, 4) (None: tool0).
+        """Measured-TCP poses (N, 4, 4) in the base frame for a declared tool (4, 4) or
+        (N, 4, 4) (None: tool0), with the measurement's tool correction (a target
+        ball's offset error) applied after it: what a tracker would see.
 
         With `with_jacobian`, also the approximate space Jacobian with respect to
         the commanded joints (N, 6, 6): the actual geometry's Jacobian scaled by
@@ -156,6 +192,8 @@ class ErrorModel:
         """
         T, jac, geom = self._forward(robot, q_cmd, ctx, with_jacobian=with_jacobian)
         declared = np.eye(4) if tool is None else np.asarray(tool, dtype=float)
+        if declared.ndim == 3 and declared.shape[0] not in (1, T.shape[0]):
+            raise ModelError(f"{declared.shape[0]} tools given for {T.shape[0]} poses")
         tcp = T @ declared @ geom.tool
         if jac is not None:
             jac = jac * (1.0 + self.delta_derivative(q_cmd, ctx))[:, None, :]

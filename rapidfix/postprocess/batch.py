@@ -180,7 +180,8 @@ def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) 
             status = "error"
             note = f"{len(result.skipped)} target(s) cannot be compensated (--strict): not written"
         else:
-            status, note = ("warnings" if result.skipped else "ok"), ""
+            status = "warnings" if result.skipped or result.warnings else "ok"
+            note = result.warnings[0] if result.warnings and not result.skipped else ""
         return FileOutcome(
             rel,
             status,

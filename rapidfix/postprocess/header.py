@@ -45,6 +45,8 @@ class Header:
     input_sha256: str
     options: dict[str, str] = field(default_factory=dict)
     summary: str = ""
+    #: how the program's run was taken: payload, motion directions, temperature
+    conditions: dict[str, str] = field(default_factory=dict)
 
     def lines(self) -> list[str]:
         """The comment lines, without indentation or line ends."""
@@ -60,6 +62,10 @@ class Header:
         ]
         if self.summary:
             out.append(f"! {MARK} summary: {_clean(self.summary)}")
+        if self.conditions:
+            conditions = " ".join(f"{k}={_clean(v).replace(' ', '_')}"
+                                  for k, v in sorted(self.conditions.items()))
+            out.append(f"! {MARK} conditions: {conditions}")
         return out
 
     def render(self, indent: str, newline: str) -> str:
@@ -76,10 +82,13 @@ def read_header(text: str) -> Header | None:
         fields.setdefault(match.group(1).lower(), match.group(2))
     if "version" not in fields:
         return None
-    options = {}
+    options, conditions = {}, {}
     for item in fields.get("options", "").split():
         key, _, value = item.partition("=")
         options[key] = value
+    for item in fields.get("conditions", "").split():
+        key, _, value = item.partition("=")
+        conditions[key] = value
     return Header(
         version=fields["version"].removeprefix("rapidfix ").strip(),
         model_path=fields.get("model", ""),
@@ -87,6 +96,7 @@ def read_header(text: str) -> Header | None:
         input_sha256=fields.get("input_sha256", ""),
         options=options,
         summary=fields.get("summary", ""),
+        conditions=conditions,
     )
 
 

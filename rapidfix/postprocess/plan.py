@@ -9,6 +9,7 @@ reason a programmer can act on; no NaN leaves this module.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,13 +36,15 @@ SOLVE_REASON = "compensation did not converge"
 @dataclass(frozen=True)
 class Plan:
     """Per target: `flange` (N,4,4) intended tool0 pose in the base frame, `q_ideal` and
-    `q_cmd` (N,6) rad, `ok` (N,) and `reason` (N,) ('' where ok)."""
+    `q_cmd` (N,6) rad, `ok` (N,) and `reason` (N,) ('' where ok), and the `context`
+    (payload, directions, temperature) every row was compensated in."""
 
     flange: np.ndarray
     q_ideal: np.ndarray
     q_cmd: np.ndarray
     ok: np.ndarray
     reason: np.ndarray
+    context: Context
 
 
 def ik_on_conf(robot: Any, flange: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -50,20 +53,8 @@ def ik_on_conf(robot: Any, flange: np.ndarray, conf: np.ndarray) -> tuple[np.nda
     return robot.ik_conf(flange, np.asarray(conf, dtype=int))
 
 
-def compensation_tool(placement: Placement) -> np.ndarray:
-    """The TCP the general solve matches (N,4,4): the tool for robot-held tools, else tool0.
-
-    With a stationary tool the robot carries the work object, so the flange pose
-    itself must be reached.
-    """
-    if not placement.stationary.any():
-        return placement.tool
-    eye = np.broadcast_to(np.eye(4), placement.tool.shape)
-    return np.where(placement.stationary[:, None, None], eye, placement.tool)
-
-
 def compensate_joints(
-    model: ErrorModel, robot: Any, q_ideal: np.ndarray, placement: Placement, ctx: Context
+    model: ErrorModel, robot: Any, q_ideal: np.ndarray, ctx: Context
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Commanded joints (N,6) for ideal joints, with success mask and reasons."""
     n = q_ideal.shape[0]
@@ -71,7 +62,7 @@ def compensate_joints(
     if n == 0:
         return np.zeros((0, 6)), np.zeros(0, dtype=bool), reason
     try:
-        result = solve_compensation(model, robot, q_ideal, ctx, tool=compensation_tool(placement))
+        result = solve_compensation(model, robot, q_ideal, ctx)
     except ModelError as err:
         reason[:] = f"the model cannot compensate it: {err.message}"
         return q_ideal.copy(), np.zeros(n, dtype=bool), reason
@@ -106,20 +97,32 @@ def _explain_conf(robot: Any, flange: np.ndarray, conf: np.ndarray, status: np.n
                        f"(it is reachable with {options})")
 
 
+Conditions = Callable[[np.ndarray, np.ndarray], Context]
+"""The context of every row for its joints (N,6) and whether each is solved (N,)."""
+
+
 def plan_targets(
     model: ErrorModel,
     robot: Any,
     targets: np.ndarray,
     conf: np.ndarray,
     placement: Placement,
-    ctx: Context,
+    conditions: Context | Conditions,
 ) -> Plan:
-    """Plan every target (N,4,4) TCP pose in its work object, on its confdata branch."""
+    """Plan every target (N,4,4) TCP pose in its work object, on its confdata branch.
+
+    `conditions` is the rows' context, or a function giving it for the rows' joints
+    (motion directions follow from the joints). The directions are taken from the
+    ideal joints first; rows where the commanded joints move the other way are
+    solved again with the directions the commanded joints give.
+    """
     n = targets.shape[0]
     flange = placement.flange(targets) if n else np.zeros((0, 4, 4))
     reason = np.full(n, "", dtype=object)
     if n == 0:
-        return Plan(flange, np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0, bool), reason)
+        return Plan(flange, np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0, bool), reason,
+                    Context())
+    context = conditions if callable(conditions) else (lambda _q, _known: conditions)
     q_ideal, status = ik_on_conf(robot, flange, conf)
     status = np.asarray(status)
     solved = status == IKStatus.OK
@@ -130,18 +133,19 @@ def plan_targets(
     idx = np.flatnonzero(solved)
     q_cmd = q_ideal.copy()
     ok = np.zeros(n, dtype=bool)
+    ctx = context(q_ideal, solved)
     if idx.size:
-        if ctx.q_prev is None:
-            # targets in program order: each is approached from the one before it
-            # (direction-dependent effects such as backlash need the motion direction)
-            q_prev = q_ideal[idx].copy()
-            q_prev[1:] = q_ideal[idx][:-1]
-            sub = ctx.take(idx).with_q_prev(q_prev)
-        else:
-            sub = ctx.take(idx)
-        qc, good, why = compensate_joints(model, robot, q_ideal[idx], placement.take(idx), sub)
+        qc, good, why = compensate_joints(model, robot, q_ideal[idx], ctx.take(idx))
         q_cmd[idx], ok[idx], reason[idx] = qc, good, why
-    return Plan(flange, q_ideal, q_cmd, ok, reason)
+        if ctx.last_direction is not None:
+            again = context(q_cmd, solved)
+            turned = idx[(again.last_direction[idx] != ctx.last_direction[idx]).any(axis=1)]
+            if turned.size:
+                qc, good, why = compensate_joints(model, robot, q_ideal[turned],
+                                                  again.take(turned))
+                q_cmd[turned], ok[turned], reason[turned] = qc, good, why
+            ctx = again
+    return Plan(flange, q_ideal, q_cmd, ok, reason, ctx)
 
 
 def plan_nearest(
@@ -166,7 +170,6 @@ def plan_nearest(
     q_cmd = q_ideal.copy()
     ok = np.zeros(n, dtype=bool)
     if idx.size:
-        qc, good, why = compensate_joints(model, robot, q_ideal[idx], placement.take(idx),
-                                          ctx.take(idx))
+        qc, good, why = compensate_joints(model, robot, q_ideal[idx], ctx.take(idx))
         q_cmd[idx], ok[idx], reason[idx] = qc, good, why
-    return Plan(flange, q_ideal, q_cmd, ok, reason)
+    return Plan(flange, q_ideal, q_cmd, ok, reason, ctx)

@@ -61,8 +61,10 @@ class Site:
 @dataclass
 class Targets:
     """Per target row: TCP `pose` (N,4,4) in its work object, `conf` (N,4) int,
-    `extax` (N,6), frames `placement`, `payload_kg` (N,), `site` (N,) owning site index,
-    `operand` the Operand of each row."""
+    `extax` (N,6), frames `placement`, the tool's load `payload_kg` (N,) and its centre of
+    gravity `payload_cog_mm` (N,3) in the flange frame, `total_load` (N,) True where
+    \\TLoad gives the move's whole load (a GripLoad is then not added), `site` (N,)
+    owning site index, `operand` the Operand of each row."""
 
     pose: np.ndarray
     conf: np.ndarray
@@ -71,6 +73,8 @@ class Targets:
     payload_kg: np.ndarray
     site: np.ndarray
     operand: list[Operand]
+    payload_cog_mm: np.ndarray | None = None
+    total_load: np.ndarray | None = None
 
 
 class Declarations:
@@ -176,11 +180,14 @@ def _optional_reason(motion: MotionInstruction) -> str | None:
 
 @dataclass(frozen=True)
 class _Frames:
-    """The tool, work object and payload (kg) a site's targets are compensated with."""
+    """The tool, work object and load (kg, centre of gravity in the flange frame, mm; `total`
+    when \\TLoad names the whole load) a site's targets are compensated with."""
 
     tool: ToolData
     wobj: WobjData | None
     mass: float
+    cog: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    total: bool = False
 
 
 def _site_frames(motion: MotionInstruction, frames: _FrameCache) -> _Frames | str:
@@ -205,13 +212,15 @@ def _site_frames(motion: MotionInstruction, frames: _FrameCache) -> _Frames | st
     if not tool.robhold and (wobj is None or not wobj.robhold):
         return "stationary tool used without a robot-held work object"
     mass = tool.tload.mass if tool.robhold else 0.0
+    cog = tuple(tool.tload.cog) if tool.robhold else (0.0, 0.0, 0.0)
     tload = motion.optional.get("tload")
     if tload is not None:
         load, why = frames.get(tload, "loaddata")
         if load is None:
             return f"\\TLoad {tload.text}: {why}"
-        mass = load.mass
-    return _Frames(tool, wobj, mass)
+        if load.mass > 0.0:  # \TLoad:=load0 means "the tool's load" (RAPID manual)
+            return _Frames(tool, wobj, load.mass, tuple(load.cog), True)
+    return _Frames(tool, wobj, mass, cog)
 
 
 def _site_values(operands: list[Operand], outside: Declarations) -> list[tuple] | str:
@@ -304,7 +313,8 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     """The rows as arrays: raw robtarget values, and per block of rows its frame set."""
     if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
-                       Placement.identity(0), np.zeros(0), np.zeros(0, int), [])
+                       Placement.identity(0), np.zeros(0), np.zeros(0, int), [],
+                       np.zeros((0, 3)), np.zeros(0, bool))
     n = len(values)
 
     def column(k: int, width: int) -> np.ndarray:
@@ -325,6 +335,8 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     wobj_o = _poses([f.wobj.oframe if f.wobj is not None else identity for f in chosen])
     stationary = np.array([not f.tool.robhold for f in chosen], dtype=bool)
     mass = np.array([f.mass for f in chosen], dtype=float)
+    cog = np.array([f.cog for f in chosen], dtype=float).reshape(-1, 3)
+    total = np.array([f.total for f in chosen], dtype=bool)
     wobj = wobj_u @ wobj_o
     if (row_set == row_set[0]).all():  # one tool and work object throughout: no copies
         first = row_set[0]
@@ -332,7 +344,7 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     else:
         placement = Placement(tool[row_set], wobj[row_set], stationary[row_set])
     return Targets(pose(trans, rot), conf, extax, placement, mass[row_set],
-                   np.repeat(owner, count), operands)
+                   np.repeat(owner, count), operands, cog[row_set], total[row_set])
 
 
 def _poses(frames: list[Any]) -> np.ndarray:

@@ -22,7 +22,7 @@ filtered robtarget instead, so its path stays the controller's line or arc.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +36,7 @@ from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.conditions import ProgramConditions
 from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
 from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
 from rapidfix.postprocess.naming import NameAllocator
@@ -48,7 +49,7 @@ from rapidfix.postprocess.path import (
     wrist_levers,
 )
 from rapidfix.postprocess.placement import Placement
-from rapidfix.postprocess.plan import Plan, plan_nearest, plan_targets
+from rapidfix.postprocess.plan import Plan, compensate_joints, plan_nearest, plan_targets
 from rapidfix.postprocess.resolve import Declarations, Site, operand_label, resolve
 from rapidfix.postprocess.verify import Expected, predicted_deviation, read_back
 from rapidfix.rapid import MotionInstruction, Program, parse_program
@@ -69,12 +70,17 @@ class RewriteOptions:
     path_tolerance_mm: float = 0.1
     strict: bool = False
     force: bool = False
+    #: the cell temperature the program will run at (°C); None: not known
+    temperature_c: float | None = None
 
     def __post_init__(self) -> None:
         if self.emit not in EMIT_CHOICES:
             raise RapidfixError(f"--emit must be one of {', '.join(EMIT_CHOICES)}")
         if not (math.isfinite(self.path_tolerance_mm) and self.path_tolerance_mm > 0):
             raise RapidfixError("--path-tolerance must be a positive number of mm")
+        if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
+            raise RapidfixError(f"--temperature {self.temperature_c:g} °C is not a cell "
+                                "temperature (give degrees Celsius, -50 to 150)")
 
 
 
@@ -87,6 +93,8 @@ def header_options(options: RewriteOptions, comp: Compensator) -> dict[str, str]
     }
     if comp.decl_paths:
         recorded["decls_sha256"] = comp.decls_sha256
+    if options.temperature_c is not None:
+        recorded["temperature_c"] = f"{options.temperature_c:g}"
     return recorded
 
 
@@ -120,6 +128,12 @@ class RewriteResult:
     output: str | None = None
     backup: str | None = None
     inserted: set[str] = field(default_factory=set)
+    #: how the program's run was taken (payload, directions, temperature): printed
+    notes: list[str] = field(default_factory=list)
+    #: what had to be assumed and may make the result wrong: printed as warnings, exit 3
+    warnings: list[str] = field(default_factory=list)
+    #: the model's predicted TCP error of the original program's moves (mean, max), mm
+    predicted_before_mm: tuple[float, float] | None = None
 
     def report_lines(self) -> list[str]:
         """What the command prints."""
@@ -135,6 +149,11 @@ class RewriteResult:
         if self.moves_filtered:
             lines.append(f"  {self.moves_filtered} linear/circular moves kept their instruction "
                          "with a filtered robtarget (start not known before run time)")
+        lines.extend(f"  {note}" for note in self.notes)
+        if self.predicted_before_mm is not None:
+            mean, worst = self.predicted_before_mm
+            lines.append(f"predicted TCP error of the original moves on this robot: mean "
+                         f"{mean:.4f} mm, max {worst:.4f} mm")
         if self.worst_predicted_mm is not None:
             lines.append(
                 f"predicted worst-case TCP deviation from the intended poses: "
@@ -203,6 +222,35 @@ def _joint_statement(text: str, site: Site, name: str) -> str:
     return f"MoveAbsJ{head}{name}{text[value.end:syntax.end]}"
 
 
+class _TakeUp:
+    """The direction of each joint along a path whose joints reverse at its start.
+
+    A reversing joint with play stands still until its motor has taken the play up;
+    between the two directions its direction is the fraction taken up, so the path
+    check sees the joint stand (not jump) at the start of the move.
+    """
+
+    def __init__(self, play: np.ndarray, context: Context, from_row: np.ndarray,
+                 q_start: np.ndarray, absj: dict[int, np.ndarray]) -> None:
+        self.play = play
+        self.active = context.last_direction is not None and bool(np.any(play > 0))
+        self.start_dir = np.zeros((len(from_row), 6))
+        if context.last_direction is not None:
+            self.start_dir = np.asarray(context.last_direction, dtype=float)[from_row].copy()
+            if absj:  # a MoveAbsJ start: its direction is not followed here
+                self.start_dir[np.fromiter(absj, dtype=int, count=len(absj))] = 0.0
+        self.q_start = q_start
+
+    def __call__(self, ctx: Context, seg: np.ndarray, q: np.ndarray) -> Context:
+        if not self.active or ctx.last_direction is None:
+            return ctx
+        travel = np.abs(q - self.q_start[seg])
+        frac = np.clip(travel / np.where(self.play > 0, self.play, 1.0), 0.0, 1.0)
+        frac = np.where(self.play > 0, frac, 1.0)
+        start = self.start_dir[seg]
+        return replace(ctx, last_direction=start + (ctx.last_direction - start) * frac)
+
+
 class _Rewriter:
     """State of one rewrite (kept together so the steps read as methods)."""
 
@@ -221,6 +269,8 @@ class _Rewriter:
         self.inserted: set[str] = set()
         self.refinement: Refinement | None = None
         self.refined_sites: list[int] = []
+        #: the arrival direction of every intermediate point (refinement order), if followed
+        self.inter_direction: np.ndarray | None = None
         self.units = CheckUnits()
         # what verification reads back: (statement id, target slot, target row) ...
         self.checks: list[tuple[int, int, int]] = []
@@ -233,8 +283,11 @@ class _Rewriter:
         outside = Declarations(self.comp.decls)
         self.sites, self.targets = resolve(self.program, outside, self.options.emit)
         t = self.targets
-        ctx = Context(payload_kg=t.payload_kg)
-        self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement, ctx)
+        self.conditions = ProgramConditions(
+            self.program, self.sites, t, outside, self.options.temperature_c,
+            self.model.context_fields(), joint_moves=self.options.emit == "jointtargets")
+        self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
+                                  self.conditions)
         # rows are in site order: the first failed row of each site names its reason
         for row in np.flatnonzero(~self.plan_.ok).tolist():
             site = self.sites[int(t.site[row])]
@@ -311,15 +364,18 @@ class _Rewriter:
         frames = t.placement.take(to_row)
         start_tcp = frames.tcp(start_flange)
         curves = Curves(start_tcp, t.pose[to_row], t.pose[via_row, :3, 3], circular)
-        payload = t.payload_kg[to_row]
+        # points between two targets run in the destination's conditions: its payload,
+        # and each joint moving the way it moves into the destination
+        seg_ctx = p.context.take(to_row)
+        take_up = _TakeUp(self.model.play(), p.context, from_row, q0c, absj)
 
         def predict(seg: np.ndarray, q: np.ndarray) -> np.ndarray:
-            flange = self.model.actual_flange(self.robot, q, Context(payload_kg=payload[seg]))
+            flange = self.model.actual_flange(self.robot, q, take_up(seg_ctx.take(seg), seg, q))
             return frames.take(seg).tcp(flange)[:, :3, 3]
 
         def solve(seg: np.ndarray, poses: np.ndarray, seed: np.ndarray) -> tuple:
             sub: Plan = plan_nearest(self.model, self.robot, poses, seed, frames.take(seg),
-                                     Context(payload_kg=payload[seg]))
+                                     seg_ctx.take(seg))
             return sub.q_ideal, sub.q_cmd, sub.ok
 
         bound = self._line_bounds(start_flange, to_row, q0c, frames)
@@ -330,7 +386,59 @@ class _Rewriter:
         )
         for k in np.flatnonzero(self.refinement.failed):
             self.mode[segs[k]] = "filtered"
-        self.seg_frames, self.seg_payload = frames, payload
+        self.seg_frames, self.seg_context = frames, seg_ctx
+        if seg_ctx.last_direction is not None and self.refinement.seg.size:
+            self._redirect(q0c, to_row, take_up.start_dir)
+
+    def _redirect(self, q0c: np.ndarray, to_row: np.ndarray, start_dir: np.ndarray) -> None:
+        """Directions along refined paths, and the points whose direction changed solved again.
+
+        A joint need not move monotonically along a line: between intermediate points
+        it moves the way the points say, and it arrives at the destination from the
+        last of them. The points were solved with the destination's direction; those
+        (and destinations) whose joints arrive the other way are compensated again.
+        """
+        r, p = self.refinement, self.plan_
+        order = np.lexsort((r.s, r.seg))
+        seg, q_inter = r.seg[order], r.q_cmd[order]
+        m = to_row.shape[0]
+        # one chain per segment: start, intermediate points, destination
+        first = np.searchsorted(seg, np.arange(m))
+        count = np.bincount(seg, minlength=m)
+        pts = np.concatenate([q0c, q_inter, p.q_cmd[to_row]])
+        start_id, inter_id = np.arange(m), m + np.arange(seg.shape[0])
+        dest_id = m + seg.shape[0] + np.arange(m)
+        prev = np.full(pts.shape[0], -1, dtype=np.int64)
+        prev[inter_id] = np.where(np.arange(seg.shape[0]) == first[seg], start_id[seg],
+                                  inter_id - 1)
+        prev[dest_id] = np.where(count > 0, m + first + count - 1, start_id)
+        from rapidfix.postprocess.conditions import arrival_directions
+
+        initial = np.zeros((pts.shape[0], 6))
+        initial[:m] = start_dir  # where each path starts, joints point as they arrived there
+        direction = arrival_directions(pts, prev, initial)
+        dest_dir = np.asarray(p.context.last_direction, dtype=float)
+        inter_dir, new_dest = direction[inter_id], direction[dest_id]
+        used = self.seg_context.last_direction[seg]
+        redo = np.flatnonzero((inter_dir != used).any(axis=1))
+        if redo.size:
+            ctx = replace(self.seg_context.take(seg[redo]), last_direction=inter_dir[redo])
+            qc, good, _ = compensate_joints(self.model, self.robot, r.q_ideal[order][redo], ctx)
+            rows = order[redo]
+            r.q_cmd[rows] = np.where(good[:, None], qc, r.q_cmd[rows])
+        self.inter_direction = np.empty_like(inter_dir)
+        self.inter_direction[order] = inter_dir
+        changed = np.flatnonzero((new_dest != dest_dir[to_row]).any(axis=1)
+                                 & (count > 0) & p.ok[to_row])
+        if changed.size:
+            rows = to_row[changed]
+            all_dir = dest_dir.copy()
+            all_dir[rows] = new_dest[changed]
+            context = replace(p.context, last_direction=all_dir)
+            qc, good, _ = compensate_joints(self.model, self.robot, p.q_ideal[rows],
+                                            context.take(rows))
+            p.q_cmd[rows] = np.where(good[:, None], qc, p.q_cmd[rows])
+            self.plan_ = replace(p, context=context)
 
     def _line_bounds(self, start_flange: np.ndarray, to_row: np.ndarray, q0c: np.ndarray,
                      frames: Placement) -> np.ndarray:
@@ -570,11 +678,11 @@ class _Rewriter:
 
     def _expected(self) -> Expected:
         """Each compensated pose: the check statement and slot it is read from, its
-        intended TCP, frames and payload."""
+        intended TCP, frames and the conditions it runs in."""
         t = self.targets
         ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
         placement = t.placement.take(rows)
-        tcp, payload = t.pose[rows], t.payload_kg[rows]
+        tcp, context = t.pose[rows], self.plan_.context.take(rows)
         if self.inter_checks:
             inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
             frames = self.seg_frames.take(seg)
@@ -584,8 +692,78 @@ class _Rewriter:
             ids = np.concatenate([ids, inter_ids])
             slots = np.concatenate([slots, np.zeros(len(seg), int)])
             tcp = np.concatenate([tcp, self.refinement.pose[index]])
-            payload = np.concatenate([payload, self.seg_payload[seg]])
-        return Expected(ids, slots, tcp, placement, payload)
+            inter = self.seg_context.take(seg)
+            if self.inter_direction is not None:
+                inter = replace(inter, last_direction=self.inter_direction[index])
+            context = Context.concatenate(context, inter)
+        return Expected(ids, slots, tcp, placement, context)
+
+
+def _run_statement(job: _Rewriter, options: RewriteOptions
+                   ) -> tuple[list[str], list[str], dict[str, str]]:
+    """(notes, warnings, header record) of how the program's run was taken: what the
+    model's effects read, where the program tells it, and what had to be assumed."""
+    needs = job.model.context_fields()
+    cond = job.conditions
+    notes: list[str] = []
+    warnings: list[str] = []
+    record: dict[str, str] = {}
+    ok = job.plan_.ok
+    if "payload_kg" in needs:
+        grips = cond.grip_statements
+        record["payload"] = "tool_loads+GripLoad" if grips else "tool_loads"
+        notes.append("payload: each move's tool load (or \\TLoad)"
+                     + (f" plus the gripped load of {grips} GripLoad statement(s), "
+                        "followed in the order the moves execute" if grips else
+                        "; the program sets no GripLoad"))
+        if cond.grip_unknown:
+            record["payload_unknown_moves"] = str(cond.grip_unknown)
+            warnings.append(
+                f"the gripped load of {cond.grip_unknown} move(s) is not known before run "
+                "time (a GripLoad on only some paths to them, or a routine this program "
+                "does not call): no gripped load assumed there")
+    if "last_direction" in needs:
+        direction = job.plan_.context.last_direction
+        unknown = 0 if direction is None else int(
+            np.count_nonzero((direction[ok] == 0).any(axis=1)))
+        record["direction"] = "move_order"
+        record["direction_unknown_moves"] = str(unknown)
+        notes.append("motion direction: from the order the moves execute in"
+                     + (f"; {unknown} move(s) start where the program cannot say before run "
+                        "time (first move of a routine, loop or branch): taken midway "
+                        "between the directions" if unknown else ""))
+    for eff in job.model.robot_effects:
+        fields = eff.context_fields()
+        reference = getattr(eff, "reference", None)
+        if "temp_c" in fields:
+            if options.temperature_c is None:
+                assumed = f"{reference:g} °C" if reference is not None else "its reference"
+                record["temperature_c"] = (f"assumed_{reference:g}" if reference is not None
+                                           else "assumed_reference")
+                warnings.append(
+                    f"the model's {eff.name} depends on the cell temperature and no "
+                    f"--temperature was given: assumed the calibration's {assumed}")
+            else:
+                record["temperature_c"] = f"{options.temperature_c:g}"
+        if "time_s" in fields:
+            record["time_s"] = "assumed_reference"
+            warnings.append(
+                f"the model's {eff.name} depends on the time since the robot started, which "
+                "a program cannot know: taken at the calibration's reference time")
+    return notes, warnings, record
+
+
+def _predicted_before(job: _Rewriter) -> tuple[float, float] | None:
+    """The model's TCP error (mean, max, mm) of the compensated targets as the original
+    program commands them (the ideal joints), in the conditions they run in."""
+    p, t = job.plan_, job.targets
+    rows = np.flatnonzero(p.ok)
+    if rows.size == 0:
+        return None
+    flange = job.model.actual_flange(job.robot, p.q_ideal[rows], p.context.take(rows))
+    tcp = t.placement.take(rows).tcp(flange)
+    err = np.linalg.norm(tcp[:, :3, 3] - t.pose[rows, :3, 3], axis=1)
+    return float(err.mean()), float(err.max())
 
 
 def _module_indent(program: Program) -> str:
@@ -652,6 +830,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
             worst_path = float(job.refinement.deviation[keep].max())
     summary = (f"{compensated} of {len(job.sites)} moves compensated, {points} points added, "
                f"{len(job.skipped)} left as they were")
+    notes, warnings, conditions = _run_statement(job, options)
     header = Header(
         version=__version__,
         model_path=comp.model_path,
@@ -659,6 +838,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         input_sha256=sha256_bytes(data),
         options=header_options(options, comp),
         summary=summary,
+        conditions=conditions,
     )
     if old is not None:
         _strip_old_header(job.editor, program.text)
@@ -681,6 +861,9 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         worst_path_mm=worst_path,
         header=header,
         inserted=job.inserted,
+        notes=notes,
+        warnings=warnings,
+        predicted_before_mm=_predicted_before(job),
     )
 
 

@@ -37,13 +37,14 @@ class Expected:
     from (`motion` (K,), an index into the list `parse_units` returns), the target
     operand of that motion (`slot` (K,): 0 the CirPoint or the only target, 1 the
     ToPoint of a circular move), the intended TCP `tcp` (K,4,4) in its work object,
-    its frames and payload."""
+    its frames and the conditions it runs in (`context`: payload, directions,
+    temperature)."""
 
     motion: np.ndarray
     slot: np.ndarray
     tcp: np.ndarray
     placement: Placement
-    payload_kg: np.ndarray
+    context: Context
 
 
 def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
@@ -294,6 +295,6 @@ def predicted_deviation(
     if expected.motion.shape[0] == 0:
         return np.zeros(0)
     q = commanded_joints(robot, read, expected, filename)
-    flange = model.actual_flange(robot, q, Context(payload_kg=expected.payload_kg))
+    flange = model.actual_flange(robot, q, expected.context)
     tcp = expected.placement.tcp(flange)
     return np.linalg.norm(tcp[:, :3, 3] - expected.tcp[:, :3, 3], axis=1)

@@ -36,6 +36,8 @@ class RunConditions:
     time_s: np.ndarray | None = None
     temp_c: np.ndarray | None = None
     q_prev: np.ndarray | None = None
+    #: the payload's centre of gravity in the flange frame (N, 3) mm; None: at the ball
+    payload_cog_mm: np.ndarray | None = None
 
 
 def _field(ctx: Any, name: str) -> Any:
@@ -130,8 +132,14 @@ class VirtualRobot:
             payload = _field(ctx, "payload_kg")
             payload = self.payload_kg if payload is None else payload
             dirs, points = self.actual_model.joint_frames(q_act)
-            ball = self._ball(q_act, 1.0)
-            torque = gravity_torque(dirs, points, ball, np.broadcast_to(payload, (len(q),)))
+            cog = _field(ctx, "payload_cog_mm")
+            if cog is None:
+                at = self._ball(q_act, 1.0)
+            else:
+                T = self.actual_model.fk(q_act)
+                cog = np.broadcast_to(np.asarray(cog, dtype=float), (len(q), 3))
+                at = np.einsum("nij,nj->ni", T[:, :3, :3], cog) + T[:, :3, 3]
+            torque = gravity_torque(dirs, points, at, np.broadcast_to(payload, (len(q),)))
             q_act = q_act.copy()
             q_act[:, 1:3] += self.errors.compliance * torque
         return q_act
@@ -144,6 +152,16 @@ class VirtualRobot:
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
         return self._ball(self.actual_joints(q, ctx, jitter), scale)
+
+    def tcp_poses(self, q_cmd: np.ndarray, tool: np.ndarray, ctx: Any = None, *,
+                  jitter: np.ndarray | None = None) -> np.ndarray:
+        """Where a tool (4,4) or (N,4,4) on the flange really is (N,4,4), base frame, for
+        commanded q_cmd (N,6) rad run in `ctx` (the arm grows about the base)."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        T = self.actual_model.fk(self.actual_joints(q, ctx, jitter))
+        scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
+        T[:, :3, 3] *= np.reshape(scale, (-1, 1))
+        return T @ np.asarray(tool, dtype=float)
 
     def ball_positions(self, q_cmd: np.ndarray, ctx: Any = None) -> np.ndarray:
         """Noise-free true ball centres (N, 3) mm in the robot base frame."""

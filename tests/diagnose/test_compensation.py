@@ -26,7 +26,7 @@ def _landing_error(model, robot, world, vr, q_ideal, payload, ball, seed):
     ctx = Context.from_rows(q_ideal, payload_kg=payload)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)  # fresh poses may leave the sweeps
-        q_cmd = compensate(model, robot, q_ideal, ctx, tool=tool)
+        q_cmd = compensate(model, robot, q_ideal, ctx)
     run = RunConditions(payload_kg=payload, q_prev=np.vstack([q_cmd[:1], q_cmd[:-1]]))
     seen = world_to_base(world, vr.measure(q_cmd, run, frame="tracker", seed=seed))
     T = robot.fk(q_ideal)

@@ -99,7 +99,7 @@ def test_general_solve_compensates_a_geometry_effect_it_has_no_code_for(joint_mo
     q_ideal = _poses(200, 2)
     tool = np.eye(4)
     tool[:3, 3] = [50.0, 0.0, 120.0]
-    res = solve_compensation(model, ROBOT, q_ideal, tool=tool)
+    res = solve_compensation(model, ROBOT, q_ideal)
     assert res.method == "general" and res.converged.all()
     # independent truth: the kinematics layer's own model of the tilted robot
     dirs = ROBOT.axis_dirs.copy()

@@ -2,10 +2,11 @@
 
 Gears and belts have play b: approached from below a joint stops b/2 short,
 from above b/2 beyond, so its error flips sign with the direction of its last
-motion, Δθ_j = −(b_j / 2) · d_j, d_j = ±1. The direction comes from the row
-order (the context's previous pose): rows are taken as executed in order, and a
-joint that did not move keeps the direction of its last motion. Before its
-first motion a joint's direction is unknown and it contributes nothing.
+motion, Δθ_j = −(b_j / 2) · d_j, d_j = ±1. The direction is the context's
+(`Context.direction`): given per pose, or from the row order (the previous pose),
+where a joint that did not move keeps the direction of its last motion. Where it
+is unknown (before a joint's first motion, or a move whose start is not known
+before run time) d_j = 0: the value midway between the directions.
 The error depends on θ_j and the context only, so it is compensated joint by joint.
 """
 
@@ -16,23 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from rapidfix.errors.candidates.vector import VectorEffect
-from rapidfix.errors.context import Context
-
-#: joint motions smaller than this (rad) count as "did not move"
-STILL_RAD = 1e-9
-
-
-def last_motion_direction(q: np.ndarray, q_prev: np.ndarray | None) -> np.ndarray:
-    """Sign (N, 6) of each joint's last motion over rows executed in order; 0 if unknown."""
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    if q_prev is None:
-        return np.zeros_like(q)
-    step = q - np.atleast_2d(np.asarray(q_prev, dtype=float))
-    sign = np.where(np.abs(step) > STILL_RAD, np.sign(step), 0.0)
-    rows = np.arange(q.shape[0])[:, None]
-    moved_at = np.maximum.accumulate(np.where(sign != 0, rows, -1), axis=0)
-    filled = np.take_along_axis(sign, np.maximum(moved_at, 0), axis=0)
-    return np.where(moved_at >= 0, filled, 0.0)
+from rapidfix.errors.context import STILL_RAD, Context, last_motion_direction
 
 
 class Backlash(VectorEffect):
@@ -48,5 +33,17 @@ class Backlash(VectorEffect):
 
     def joint_delta(self, q_cmd: np.ndarray, ctx: Context) -> np.ndarray:
         """Half the play against the last motion, per joint."""
-        direction = last_motion_direction(q_cmd, ctx.q_prev)
-        return -0.5 * self._p * direction
+        return -0.5 * self._p * ctx.direction(q_cmd)
+
+    def play(self) -> np.ndarray:
+        """Play (6,) rad of each joint: the motor travel a reversing joint needs before
+        it moves. A fractional direction between the old and the new one describes that
+        take-up (the joint stands still while it lasts)."""
+        return np.abs(self._p)
+
+    def context_fields(self) -> frozenset[str]:
+        """What this effect reads from the context."""
+        return frozenset({"last_direction"})
+
+
+__all__ = ["STILL_RAD", "Backlash", "last_motion_direction"]  # the direction rule lives in context

@@ -4,9 +4,11 @@ A gear train is a torsion spring: the joint turns by Δθ = k · τ under the to
 it holds (the second source paper's joint deformation). Gravity loads joints 2
 and 3 of a floor-mounted arm (axes horizontal). Their torque has two parts:
 
-- the payload m (kg, per pose from the context, else the model's default) at the
-  payload point p: τ_j = ((p − a_j) × m g) · w_j, taken exactly from the nominal
-  kinematics of the commanded pose;
+- the payload m (kg, per pose from the context, else the model's default) at its
+  centre of gravity p (per pose from the context, else the payload point of the
+  calibration): τ_j = ((p − a_j) × m g) · w_j, taken exactly from the nominal
+  kinematics of the commanded pose — so stiffnesses fitted with a test weight
+  predict a program's tool and gripped part wherever their centre of gravity is;
 - the arm's own links, lumped: the upper arm (and wrist) turns with the angle
   u = θ2 ± θ3, so its torque about either axis is A cos u + B sin u; the lower
   arm and the upper arm's mass at the elbow add a first harmonic of θ2 to joint 2.
@@ -43,9 +45,13 @@ def _robot(name: str) -> RobotModel:
 
 def payload_torque_per_kg(robot: RobotModel, q: np.ndarray, point_mm: np.ndarray,
                           gravity_dir: np.ndarray) -> np.ndarray:
-    """Gravity torque (N, 2) N·m per kg of payload about joints 2 and 3."""
+    """Gravity torque (N, 2) N·m per kg of payload about joints 2 and 3.
+
+    `point_mm` is the payload's centre of gravity in the flange frame, (3,) or (N, 3).
+    """
     T = robot.fk(np.atleast_2d(q))
-    p = T[:, :3, :3] @ point_mm + T[:, :3, 3]
+    point = np.broadcast_to(np.asarray(point_mm, dtype=float), (T.shape[0], 3))
+    p = np.einsum("nij,nj->ni", T[:, :3, :3], point) + T[:, :3, 3]
     dirs, points = robot.joint_frames(np.atleast_2d(q))
     force = GRAVITY_MS2 * np.asarray(gravity_dir, dtype=float)
     lever = (p[:, None, :] - points[:, 1:3]) * 1e-3  # (N, 2, 3) m
@@ -80,10 +86,13 @@ class JointCompliance(VectorEffect):
         """Per pose (N, 2, 3): for joints 2 and 3 the regressors of their three parameters."""
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         payload = self.payload(ctx, q.shape[0])
-        key = (q.shape, hash(q.tobytes()), hash(np.ascontiguousarray(payload).tobytes()))
+        point = (self.payload_point_mm if ctx.payload_cog_mm is None
+                 else np.asarray(ctx.payload_cog_mm, dtype=float))
+        key = (q.shape, hash(q.tobytes()), hash(np.ascontiguousarray(payload).tobytes()),
+               hash(np.ascontiguousarray(point).tobytes()))
         if self._cache is not None and self._cache[0] == key:  # fitters ask again and again
             return self._cache[1]
-        tau = payload_torque_per_kg(_robot(self.robot), q, self.payload_point_mm,
+        tau = payload_torque_per_kg(_robot(self.robot), q, point,
                                     self.gravity_dir) * payload[:, None]
         u = q[:, 1] + self._elbow_sign * q[:, 2]
         arm = np.stack([np.cos(u), np.sin(u)], axis=1)
@@ -102,6 +111,10 @@ class JointCompliance(VectorEffect):
         out = np.zeros_like(q)
         out[:, 1:3] = np.einsum("nkf,kf->nk", f, coef)
         return out
+
+    def context_fields(self) -> frozenset[str]:
+        """What this effect reads from the context."""
+        return frozenset({"payload_kg", "payload_cog_mm"})
 
     def _state(self) -> dict[str, Any]:
         return {"robot": self.robot, "payload_point_mm": self.payload_point_mm.tolist(),

@@ -27,6 +27,7 @@ class TrackerFrame(VectorEffect):
 
     type_name: ClassVar[str] = "tracker_frame"
     changes_geometry: ClassVar[bool] = True
+    measurement_only: ClassVar[bool] = True
 
     def __init__(self, name: str | None = None, *, free: bool = True) -> None:
         super().__init__(_FRAME_NAMES, name, steps=[1e-6] * 3 + [1e-3] * 3, free=free)
@@ -56,6 +57,7 @@ class TrackerScale(VectorEffect):
 
     type_name: ClassVar[str] = "registration"
     changes_geometry: ClassVar[bool] = True
+    measurement_only: ClassVar[bool] = True
 
     def __init__(self, name: str | None = None, *, free: bool = True) -> None:
         super().__init__(("scale_ppm",), name, steps=[1.0], free=free)

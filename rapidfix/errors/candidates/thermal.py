@@ -60,6 +60,10 @@ class ThermalDrift(VectorEffect):
         home[:, :3, 3] *= s[:, None]
         return geometry.replaced(axis_dirs=dirs, axis_points=points, home=home)
 
+    def context_fields(self) -> frozenset[str]:
+        """What this effect reads from the context."""
+        return frozenset({self.variable})
+
     def describe(self) -> str:
         """One line naming the driving variable."""
         return f"{self.name} (arm length against {self.variable}, reference {self.reference:g})"

@@ -2,8 +2,9 @@
 
 The setup declares where the ball sits in the flange frame; if it sits
 elsewhere (a different nest, a bent adapter), every measured point is off by
-that vector turned with the flange. Three parameters, mm, in the declared
-tool's frame (for a ball: the flange frame).
+that vector turned with the flange. Three parameters, mm, in the flange frame.
+It belongs to the measurement set-up, not to the robot: a program's tools are
+declared (and measured) on their own, so compensation never applies it.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ class ToolOffset(VectorEffect):
 
     type_name: ClassVar[str] = "tool_offset"
     changes_geometry: ClassVar[bool] = True
+    measurement_only: ClassVar[bool] = True
 
     def __init__(self, name: str | None = None, *, free: bool = True) -> None:
         super().__init__(("dx_mm", "dy_mm", "dz_mm"), name, steps=[1e-3] * 3, free=free)

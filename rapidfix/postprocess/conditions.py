@@ -1,0 +1,326 @@
+"""The state the robot is in when each move runs: payload, motion direction, temperature.
+
+Some effects depend on more than the commanded joints. The rewrite takes that
+state from the program where the program says it, and from the user where it
+cannot:
+
+- **Payload.** The tool's load (or the move's \\TLoad) plus the load a
+  `GripLoad` statement set, followed through the routines in the order they
+  execute: a loop or an IF joins the loads that can reach a move, a call of a
+  routine of the program carries the load into and out of it, and `main`
+  starts with none (the controller resets it to load0 when a program starts
+  from the beginning). Where different loads can reach a move, or a routine is
+  not called from this program, the load is not known before run time: no
+  gripped load is assumed there, and the notes say where.
+- **Motion direction** of each joint when it arrives (backlash): from the move
+  executed just before (`chain.predecessors`); a joint that did not move keeps
+  the direction it had. Where the move before is not known before run time (the
+  first move of a routine, a loop body or an IF branch), the direction is
+  unknown and effects take the value midway between the directions.
+- **Temperature** of the cell, as the user states it (`--temperature`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rapidfix.errors.context import STILL_RAD, Context
+from rapidfix.postprocess.resolve import Declarations
+from rapidfix.rapid import Program
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.system_data import SYSTEM_DATA
+from rapidfix.rapid.values import typed_value
+
+_UNKNOWN = "unknown"
+#: calls deeper than this are taken as "load not known" (recursion guard)
+_MAX_CALL_DEPTH = 32
+
+
+@dataclass(frozen=True)
+class Load:
+    """A gripped load: its name as written, mass (kg) and centre of gravity (tool frame, mm)."""
+
+    name: str
+    mass: float
+    cog: tuple[float, float, float]
+
+
+NO_LOAD = Load("load0", 0.0, (0.0, 0.0, 0.0))
+
+
+@dataclass
+class GripLoads:
+    """Per motion of `program.motions`: the gripped load in effect, None where it is not
+    known before run time; `statements` counts the GripLoad statements of the program."""
+
+    load: list[Load | None]
+    statements: int = 0
+    uncalled: list[str] = field(default_factory=list)
+
+
+def _join(a: Any, b: Any) -> Any:
+    return a if a == b else _UNKNOWN
+
+
+class _LoadWalk:
+    """Follows GripLoad through statement lists in execution order (see the module doc)."""
+
+    def __init__(self, program: Program, outside: Declarations) -> None:
+        self.program = program
+        self.outside = outside
+        self.index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
+        self.routines = {r.name.lower(): r for r in self._routine_nodes()}
+        self.record: dict[int, Any] = {}
+        self.entries: dict[str, Any] = {}
+        self.exits: dict[tuple[str, Any], Any] = {}
+        self.active: set[str] = set()
+        self.statements = 0
+
+    def _routine_nodes(self) -> list[s.Routine]:
+        return [item for module in self.program.syntax.modules for item in module.items
+                if isinstance(item, s.Routine)]
+
+    def load_named(self, expr: Any, routine: str) -> Any:
+        """The Load an argument names, or unknown when it is not a static loaddata."""
+        if not isinstance(expr, s.NameRef):
+            return _UNKNOWN
+        decl = self.program.declaration(expr.name, routine)
+        data = None
+        if decl is not None:
+            if decl.static and decl.type_key == "loaddata":
+                data = decl.data
+        else:
+            data = self.outside.get(expr.name, "loaddata")
+            if data is None and expr.key in SYSTEM_DATA:
+                value, type_name = SYSTEM_DATA[expr.key]
+                data = typed_value(type_name, value) if type_name == "loaddata" else None
+        if data is None:
+            return _UNKNOWN
+        return Load(expr.name, float(data.mass), tuple(float(c) for c in data.cog))
+
+    def body(self, statements: list[s.Statement], state: Any, routine: str, depth: int) -> Any:
+        """Walk one statement list from `state`; the state after it."""
+        for statement in statements:
+            k = self.index_of.get(id(statement))
+            if k is not None:
+                self.record[k] = _join(self.record.get(k, state), state)
+                continue
+            nested = list(statement.bodies())
+            if nested:
+                after = state
+                for inner in nested:
+                    end = self.body(inner, state, routine, depth)
+                    if end != state:  # a loop may run it again, an IF may skip it
+                        self.body(inner, _UNKNOWN, routine, depth)
+                    after = _join(after, end)
+                state = after
+            elif isinstance(statement, s.ProcedureCall):
+                if statement.key == "gripload":
+                    self.statements += 1
+                    args = statement.args
+                    state = (self.load_named(args[0].value, routine)
+                             if args and args[0].value is not None else _UNKNOWN)
+                elif statement.key in self.routines:
+                    state = self.call(statement.key, state, depth + 1)
+        return state
+
+    def call(self, key: str, state: Any, depth: int) -> Any:
+        """Run routine `key` from `state`; its exit state (unknown on recursion)."""
+        self.entries[key] = _join(self.entries.get(key, state), state)
+        memo = self.exits.get((key, state))
+        if memo is not None:
+            return memo
+        if key in self.active or depth > _MAX_CALL_DEPTH:
+            return _UNKNOWN
+        self.active.add(key)
+        routine = self.routines[key]
+        end = self.body(routine.body, state, routine.name, depth)
+        for handler in routine.handlers:
+            self.body(handler.body, _UNKNOWN, routine.name, depth)
+        self.active.discard(key)
+        self.exits[(key, state)] = end
+        return end
+
+
+def grip_loads(program: Program, outside: Declarations | None = None) -> GripLoads:
+    """The gripped load in effect at every motion of the program (see the module doc)."""
+    walk = _LoadWalk(program, outside or Declarations([]))
+    if "main" in walk.routines:
+        walk.call("main", NO_LOAD, 0)
+    uncalled = [r.name for key, r in walk.routines.items() if key not in walk.entries]
+    for name in uncalled:
+        walk.call(name.lower(), _UNKNOWN, 0)
+    if walk.statements == 0:  # nothing in this program sets a gripped load
+        loads: list[Load | None] = [NO_LOAD] * len(program.motions)
+        return GripLoads(loads, 0, uncalled)
+    loads = [None if walk.record.get(k, _UNKNOWN) == _UNKNOWN else walk.record[k]
+             for k in range(len(program.motions))]
+    return GripLoads(loads, walk.statements, uncalled)
+
+
+def total_load(tool_mass: np.ndarray, tool_cog: np.ndarray, tool_frame: np.ndarray,
+               grip_mass: np.ndarray, grip_cog: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mass (N,) kg and centre of gravity (N,3) mm in the flange frame of a tool's load
+    (cog in the flange frame) and a gripped load (cog in the tool frame (N,4,4))."""
+    grip_flange = np.einsum("nij,nj->ni", tool_frame[:, :3, :3], grip_cog) + tool_frame[:, :3, 3]
+    mass = tool_mass + grip_mass
+    weighted = tool_mass[:, None] * tool_cog + grip_mass[:, None] * grip_flange
+    cog = np.divide(weighted, mass[:, None], out=np.zeros_like(weighted),
+                    where=mass[:, None] > 0.0)
+    return mass, cog
+
+
+def arrival_directions(q: np.ndarray, prev: np.ndarray,
+                       initial: np.ndarray | None = None) -> np.ndarray:
+    """Sign (N,6) of each joint's motion into point i from point prev[i] (−1: not known).
+
+    A joint that did not move keeps the direction it had at prev[i], along the chain
+    (pointer jumping: a few vectorised passes, however long the chain); at a point
+    without prev the direction is `initial` (N,6) (default 0: not known).
+    """
+    q = np.asarray(q, dtype=float)
+    n = q.shape[0]
+    prev = np.asarray(prev, dtype=np.int64)
+    if n == 0:
+        return np.zeros((0, 6))
+    has_prev = prev >= 0
+    step = np.where(has_prev[:, None], q - q[np.maximum(prev, 0)], 0.0)
+    sign = np.where(np.abs(step) > STILL_RAD, np.sign(step), 0.0)
+    if initial is not None:
+        sign = np.where(has_prev[:, None], sign, initial)
+    rows = np.arange(n)
+    # source[i, j]: the point whose sign decides joint j at point i
+    source = np.where((sign != 0) | ~has_prev[:, None], rows[:, None], prev[:, None])
+    while True:
+        nxt = np.take_along_axis(source, source, axis=0)
+        if np.array_equal(nxt, source):
+            break
+        source = nxt
+    return np.take_along_axis(sign, source, axis=0)
+
+
+@dataclass(frozen=True)
+class RunState:
+    """What the rewrite assumes about how the program runs, for the header and the notes."""
+
+    temperature_c: float | None
+    notes: list[str]
+    warnings: list[str]
+    recorded: dict[str, str]
+
+
+def context_for(payload_kg: np.ndarray, payload_cog_mm: np.ndarray, direction: np.ndarray | None,
+                temperature_c: float | None) -> Context:
+    """The error model's context for rows with these conditions."""
+    n = payload_kg.shape[0]
+    temp = None if temperature_c is None else np.full(n, float(temperature_c))
+    return Context(payload_kg=payload_kg, temp_c=temp, last_direction=direction,
+                   payload_cog_mm=payload_cog_mm)
+
+
+def _absj_joints(motion: Any) -> np.ndarray | None:
+    """The joints (rad) of a MoveAbsJ whose jointtarget is known before run time."""
+    if motion.name.lower() != "moveabsj" or motion.target_kind != "jointtarget":
+        return None
+    target = motion.target
+    data = target.data if target is not None and target.static else None
+    if data is None:
+        return None
+    return np.radians(np.asarray(data.robax, dtype=float))
+
+
+class ProgramConditions:
+    """Payload, arrival direction and temperature of every target row of a program.
+
+    Built once per rewrite from the program, its resolved sites and target rows;
+    calling it with the joints of every row gives the error model's Context.
+    `joint_moves`: linear and circular moves become MoveAbsJ (their CirPoint is then
+    no stop on the way).
+    """
+
+    def __init__(self, program: Program, sites: list[Any], targets: Any,
+                 outside: Declarations, temperature_c: float | None,
+                 needs: frozenset[str], *, joint_moves: bool = True) -> None:
+        from rapidfix.postprocess.chain import predecessors
+
+        n = len(targets.site)
+        self.temperature_c = temperature_c
+        self.needs = needs
+        grips = grip_loads(program, outside) if "payload_kg" in needs else None
+        motion_of_row = np.zeros(n, dtype=np.int64)
+        for site in sites:
+            if site.rows:
+                motion_of_row[site.rows] = site.index
+        self._payload(targets, grips, motion_of_row)
+        # the points the chain runs through: target rows, then known MoveAbsJ joints
+        motions = program.motions
+        last_point = np.full(len(motions), -1, dtype=np.int64)
+        prev_row = np.full(n, -1, dtype=np.int64)
+        extra: list[np.ndarray] = []
+        pred = predecessors(program) if "last_direction" in needs else [-1] * len(motions)
+        site_of = {site.index: site for site in sites if site.rows}
+        for k, motion in enumerate(motions):  # one pass over the instructions, no math
+            site = site_of.get(k)
+            if site is not None:
+                last_point[k] = site.rows[-1]
+                continue
+            joints = _absj_joints(motion) if "last_direction" in needs else None
+            if joints is not None:
+                last_point[k] = n + len(extra)
+                extra.append(joints)
+        extra_prev = np.full(len(extra), -1, dtype=np.int64)
+        for k, before in enumerate(pred):
+            if before < 0:
+                continue
+            site = site_of.get(k)
+            if site is not None:
+                prev_row[site.rows[0]] = last_point[before]
+                if joint_moves and site.kind == "C":  # MoveAbsJ: the CirPoint is not a stop
+                    prev_row[site.rows[-1]] = last_point[before]
+                else:  # the controller's arc passes the CirPoint, then the ToPoint
+                    for a, b in zip(site.rows, site.rows[1:]):
+                        prev_row[b] = a
+            elif last_point[k] >= n:
+                extra_prev[last_point[k] - n] = last_point[before]
+        self.prev = np.concatenate([prev_row, extra_prev])
+        self.extra = np.array(extra, dtype=float).reshape(-1, 6)
+        self.n = n
+        self.unknown_start = int(np.count_nonzero(prev_row < 0)) if n else 0
+
+    def _payload(self, targets: Any, grips: GripLoads | None, motion_of_row: np.ndarray) -> None:
+        """Mass and centre of gravity per row: the tool's load plus the gripped load."""
+        n = motion_of_row.shape[0]
+        tool_mass = np.asarray(targets.payload_kg, dtype=float)
+        tool_cog = (np.zeros((n, 3)) if targets.payload_cog_mm is None
+                    else np.asarray(targets.payload_cog_mm, dtype=float))
+        self.grip_notes: list[str] = []
+        self.grip_unknown = 0
+        self.grip_statements = 0 if grips is None else grips.statements
+        if grips is None or grips.statements == 0 or n == 0:
+            self.payload_kg, self.payload_cog_mm = tool_mass, tool_cog
+            return
+        loads = [grips.load[k] for k in motion_of_row.tolist()]
+        known = np.array([load is not None for load in loads], dtype=bool)
+        total = (np.zeros(n, bool) if targets.total_load is None
+                 else np.asarray(targets.total_load, bool))
+        mass = np.array([0.0 if ld is None else ld.mass for ld in loads])
+        cog = np.array([(0.0, 0.0, 0.0) if ld is None else ld.cog for ld in loads]).reshape(n, 3)
+        mass = np.where(total, 0.0, mass)  # \TLoad is the whole load of its move
+        frame = np.broadcast_to(targets.placement.tool, (n, 4, 4))
+        self.payload_kg, self.payload_cog_mm = total_load(tool_mass, tool_cog, frame, mass, cog)
+        self.grip_unknown = int(np.count_nonzero(~known & ~total))
+
+    def __call__(self, q_rows: np.ndarray, known: np.ndarray) -> Context:
+        """The Context of every row for joints q_rows (N,6) rad; rows not `known` (not
+        solved) break the direction chain."""
+        direction = None
+        if "last_direction" in self.needs and self.n:
+            q = np.concatenate([np.asarray(q_rows, dtype=float), self.extra])
+            ok = np.concatenate([np.asarray(known, dtype=bool), np.ones(len(self.extra), bool)])
+            prev = np.where(ok[np.maximum(self.prev, 0)] & (self.prev >= 0), self.prev, -1)
+            direction = arrival_directions(q, prev)[: self.n]
+            direction[~np.asarray(known, dtype=bool)] = 0.0
+        return context_for(self.payload_kg, self.payload_cog_mm, direction, self.temperature_c)
