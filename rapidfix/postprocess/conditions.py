@@ -49,6 +49,8 @@ class Load:
 
 
 NO_LOAD = Load("load0", 0.0, (0.0, 0.0, 0.0))
+#: load0's mass in the controller's BASE module: a load this light is no load
+LOAD0_KG = 0.001
 
 
 @dataclass
@@ -77,7 +79,7 @@ class _LoadWalk:
         self.entries: dict[str, Any] = {}
         self.exits: dict[tuple[str, Any], Any] = {}
         self.active: set[str] = set()
-        self.statements = 0
+        self.seen: set[int] = set()  # the GripLoad statements met
 
     def _routine_nodes(self) -> list[s.Routine]:
         return [item for module in self.program.syntax.modules for item in module.items
@@ -99,6 +101,8 @@ class _LoadWalk:
                 data = typed_value(type_name, value) if type_name == "loaddata" else None
         if data is None:
             return _UNKNOWN
+        if data.mass <= LOAD0_KG:  # load0 (0.001 kg): no gripped load
+            return NO_LOAD
         return Load(expr.name, float(data.mass), tuple(float(c) for c in data.cog))
 
     def body(self, statements: list[s.Statement], state: Any, routine: str, depth: int) -> Any:
@@ -119,7 +123,7 @@ class _LoadWalk:
                 state = after
             elif isinstance(statement, s.ProcedureCall):
                 if statement.key == "gripload":
-                    self.statements += 1
+                    self.seen.add(id(statement))
                     args = statement.args
                     state = (self.load_named(args[0].value, routine)
                              if args and args[0].value is not None else _UNKNOWN)
@@ -153,12 +157,12 @@ def grip_loads(program: Program, outside: Declarations | None = None) -> GripLoa
     uncalled = [r.name for key, r in walk.routines.items() if key not in walk.entries]
     for name in uncalled:
         walk.call(name.lower(), _UNKNOWN, 0)
-    if walk.statements == 0:  # nothing in this program sets a gripped load
+    if len(walk.seen) == 0:  # nothing in this program sets a gripped load
         loads: list[Load | None] = [NO_LOAD] * len(program.motions)
         return GripLoads(loads, 0, uncalled)
     loads = [None if walk.record.get(k, _UNKNOWN) == _UNKNOWN else walk.record[k]
              for k in range(len(program.motions))]
-    return GripLoads(loads, walk.statements, uncalled)
+    return GripLoads(loads, len(walk.seen), uncalled)
 
 
 def total_load(tool_mass: np.ndarray, tool_cog: np.ndarray, tool_frame: np.ndarray,

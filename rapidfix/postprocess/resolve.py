@@ -218,7 +218,7 @@ def _site_frames(motion: MotionInstruction, frames: _FrameCache) -> _Frames | st
         load, why = frames.get(tload, "loaddata")
         if load is None:
             return f"\\TLoad {tload.text}: {why}"
-        if load.mass > 0.0:  # \TLoad:=load0 means "the tool's load" (RAPID manual)
+        if load.mass > 0.001:  # \TLoad:=load0 (0.001 kg) means "the tool's load"
             return _Frames(tool, wobj, load.mass, tuple(load.cog), True)
     return _Frames(tool, wobj, mass, cog)
 

@@ -1,0 +1,89 @@
+"""How the program runs: gripped loads in execution order, arrival directions along chains."""
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rapidfix.postprocess.conditions import NO_LOAD, arrival_directions, grip_loads
+from rapidfix.rapid import parse_program
+
+PROGRAM = """MODULE Cell
+  PERS loaddata lPart:=[4,[0,0,50],[1,0,0,0],0,0,0];
+  VAR bool ok:=TRUE;
+  PROC main()
+    MoveJ p1, v100, fine, tool0;
+    GripLoad lPart;
+    MoveL p2, v100, fine, tool0;
+    Place;
+    MoveL p3, v100, fine, tool0;
+    IF ok THEN
+      GripLoad lPart;
+    ENDIF
+    MoveL p4, v100, fine, tool0;
+    FOR i FROM 1 TO 3 DO
+      MoveL p5, v100, fine, tool0;
+      GripLoad lPart;
+    ENDFOR
+  ENDPROC
+  PROC Place()
+    MoveL p6, v100, fine, tool0;
+    GripLoad load0;
+  ENDPROC
+  PROC Service()
+    MoveL p7, v100, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_gripped_loads_follow_the_execution_order():
+    program = parse_program(PROGRAM.encode(), "cell.mod")
+    loads = grip_loads(program)
+    by_target = {m.target.text: loads.load[k] for k, m in enumerate(program.motions)}
+    assert loads.statements == 4
+    assert by_target["p1"] == NO_LOAD  # main starts with no gripped load
+    assert by_target["p2"].name == "lPart" and by_target["p2"].mass == 4.0
+    assert by_target["p6"].name == "lPart"  # carried into the routine called
+    assert by_target["p3"] == NO_LOAD  # ... and the routine's GripLoad load0 out of it
+    assert by_target["p4"] is None  # the IF may or may not have run: not known
+    assert by_target["p5"] is None  # first pass: unknown; later passes: lPart
+    assert by_target["p7"] is None  # not called from this program
+    assert loads.uncalled == ["Service"]
+
+
+def test_without_gripload_every_move_has_none():
+    text = PROGRAM.replace("GripLoad lPart;", "").replace("GripLoad load0;", "")
+    loads = grip_loads(parse_program(text.encode(), "cell.mod"))
+    assert loads.statements == 0 and all(ld == NO_LOAD for ld in loads.load)
+
+
+def _naive(q, prev, initial):
+    """A second formulation: walk each chain point by point."""
+    out = np.zeros_like(q)
+    for i in range(len(q)):
+        for j in range(6):
+            k, d = i, 0.0
+            while True:
+                p = prev[k]
+                if p < 0:
+                    d = initial[k, j]
+                    break
+                step = q[k, j] - q[p, j]
+                if abs(step) > 1e-9:
+                    d = np.sign(step)
+                    break
+                k = p
+            out[i, j] = d
+    return out
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 30), st.integers(0, 10_000))
+def test_arrival_directions_match_a_point_by_point_walk(n, seed):
+    rng = np.random.default_rng(seed)
+    q = np.round(rng.normal(size=(n, 6)), 1)  # repeated values: joints that stand still
+    q[rng.random((n, 6)) < 0.3] = 0.0
+    prev = np.array([rng.integers(-1, i) if i else -1 for i in range(n)])
+    initial = rng.choice([-1.0, 0.0, 1.0], size=(n, 6))
+    got = arrival_directions(q, prev, initial)
+    assert np.array_equal(got, _naive(q, prev, initial))
