@@ -40,6 +40,10 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
                         help="cell temperature (°C) the program will run at; needed by a "
                         "model with thermal drift (recorded in the header; without it the "
                         "calibration's reference is assumed and the exit status is 3)")
+    parser.add_argument("--approach", action="store_true",
+                        help="put an approach point before every compensated fine point so "
+                        "that each joint with play (a model with backlash) arrives from one "
+                        "known side, as machine tools position (recorded in the header)")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -67,6 +71,7 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
         strict=args.strict,
         force=args.force,
         temperature_c=args.temperature,
+        approach=args.approach,
     )
 
 

@@ -293,6 +293,7 @@ class ProgramConditions:
         self.extra = np.array(extra, dtype=float).reshape(-1, 6)
         self.n = n
         self.unknown_start = int(np.count_nonzero(prev_row < 0)) if n else 0
+        self.forced: np.ndarray | None = None
 
     def _payload(self, targets: Any, grips: GripLoads | None, motion_of_row: np.ndarray) -> None:
         """Mass and centre of gravity per row: the tool's load plus the gripped load."""
@@ -317,6 +318,13 @@ class ProgramConditions:
         self.payload_kg, self.payload_cog_mm = total_load(tool_mass, tool_cog, frame, mass, cog)
         self.grip_unknown = int(np.count_nonzero(~known & ~total))
 
+    def force_arrival(self, rows: np.ndarray, direction: np.ndarray) -> None:
+        """Rows reached from a known side (an approach point just before them): their
+        arrival direction (len(rows), 6), 0 on joints still taken from the move order."""
+        if self.forced is None:
+            self.forced = np.zeros((self.n, 6))
+        self.forced[np.asarray(rows, dtype=np.int64)] = direction
+
     def __call__(self, q_rows: np.ndarray, known: np.ndarray) -> Context:
         """The Context of every row for joints q_rows (N,6) rad; rows not `known` (not
         solved) break the direction chain."""
@@ -327,4 +335,6 @@ class ProgramConditions:
             prev = np.where(ok[np.maximum(self.prev, 0)] & (self.prev >= 0), self.prev, -1)
             direction = arrival_directions(q, prev)[: self.n]
             direction[~np.asarray(known, dtype=bool)] = 0.0
+            if self.forced is not None:
+                direction = np.where(self.forced != 0.0, self.forced, direction)
         return context_for(self.payload_kg, self.payload_cog_mm, direction, self.temperature_c)

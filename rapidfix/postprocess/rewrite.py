@@ -57,6 +57,16 @@ from rapidfix.rapid.edit import Editor
 from rapidfix.rapid.format import format_declaration
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
+#: an approach point stands this far beyond twice a joint's play (rad)
+APPROACH_EXTRA_RAD = np.radians(0.01)
+
+
+def _is_fine(program: Program, motion: MotionInstruction) -> bool:
+    zone = motion.zone
+    value = zone.argument.value if zone is not None else None
+    return value is not None and program.text[value.start:value.end].strip().lower() == "fine"
+
+
 #: optional arguments left off the intermediate points of a subdivided move
 INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
 INTERMEDIATE_ZONE = "z0"
@@ -72,6 +82,9 @@ class RewriteOptions:
     force: bool = False
     #: the cell temperature the program will run at (°C); None: not known
     temperature_c: float | None = None
+    #: put an approach point before every compensated fine point, so that each joint
+    #: with play arrives from one known side (unidirectional positioning)
+    approach: bool = False
 
     def __post_init__(self) -> None:
         if self.emit not in EMIT_CHOICES:
@@ -95,6 +108,8 @@ def header_options(options: RewriteOptions, comp: Compensator) -> dict[str, str]
         recorded["decls_sha256"] = comp.decls_sha256
     if options.temperature_c is not None:
         recorded["temperature_c"] = f"{options.temperature_c:g}"
+    if options.approach:
+        recorded["approach"] = "fine_points"
     return recorded
 
 
@@ -267,6 +282,8 @@ class _Rewriter:
         self.decl_blocks: dict[Any, list[str]] = {}
         self.decl_anchor_order: list[Any] = []
         self.inserted: set[str] = set()
+        #: site index -> arrival direction (6,) of the moves given an approach point
+        self.approach: dict[int, np.ndarray] = {}
         self.refinement: Refinement | None = None
         self.refined_sites: list[int] = []
         #: the arrival direction of every intermediate point (refinement order), if followed
@@ -286,8 +303,12 @@ class _Rewriter:
         self.conditions = ProgramConditions(
             self.program, self.sites, t, outside, self.options.temperature_c,
             self.model.context_fields(), joint_moves=self.options.emit == "jointtargets")
-        self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
-                                  self.conditions)
+        self.plan_ = None
+        if self.options.approach:
+            self._plan_approach()
+        if self.plan_ is None:
+            self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
+                                      self.conditions)
         # rows are in site order: the first failed row of each site names its reason
         for row in np.flatnonzero(~self.plan_.ok).tolist():
             site = self.sites[int(t.site[row])]
@@ -300,6 +321,34 @@ class _Rewriter:
             if site.reason is None:
                 joint = self.options.emit == "jointtargets" and site.kind in "LJC"
                 self.mode[i] = "joint" if joint else "filtered"
+
+    def _plan_approach(self) -> None:
+        """Every joint with play reaches a compensated MoveJ fine point moving up (down
+        where its lower limit is too close): compensate those rows in that direction.
+        A MoveL or MoveC keeps its path: its joints arrive the way the path takes them."""
+        play = self.model.play()
+        if self.options.emit != "jointtargets" or not np.any(play > 0):
+            return
+        self.approach_margin = np.where(play > 0, 2.0 * play + APPROACH_EXTRA_RAD, 0.0)
+        sites = [i for i, site in enumerate(self.sites)
+                 if site.rows and site.kind == "J" and _is_fine(self.program, site.motion)]
+        if not sites:
+            return
+        rows = np.array([self.sites[i].rows[-1] for i in sites], dtype=np.int64)
+        up = np.broadcast_to((play > 0).astype(float), (len(rows), 6))
+        direction = up.copy()
+        for _ in range(2):  # once with all up, once more if a limit turned some down
+            self.conditions.force_arrival(rows, direction)
+            t = self.targets
+            self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
+                                      self.conditions)
+            start = self.plan_.q_cmd[rows] - direction * self.approach_margin
+            low = np.asarray(self.robot.limits, dtype=float)[:, 0]
+            down = (start < low) & (direction > 0)
+            if not down.any():
+                break
+            direction = np.where(down, -up, direction)
+        self.approach = dict(zip(sites, direction))
 
     # ------------------------------------------------------------------ paths
     def _start_state(self, motion: MotionInstruction | None) -> tuple | None:
@@ -419,6 +468,9 @@ class _Rewriter:
         direction = arrival_directions(pts, prev, initial)
         dest_dir = np.asarray(p.context.last_direction, dtype=float)
         inter_dir, new_dest = direction[inter_id], direction[dest_id]
+        forced = self.conditions.forced
+        if forced is not None:  # destinations behind an approach point arrive as planned
+            new_dest = np.where(forced[to_row] != 0.0, forced[to_row], new_dest)
         used = self.seg_context.last_direction[seg]
         redo = np.flatnonzero((inter_dir != used).any(axis=1))
         if redo.size:
@@ -534,7 +586,15 @@ class _Rewriter:
                                 f"CONST jointtarget {name}:={literal};")
             return name
 
-        if not inter:
+        approach = {i: d for i, d in self.approach.items() if self.mode.get(i) == "joint"}
+        approach_literal = {}
+        if approach:
+            keys = list(approach)
+            rows = np.array([self.sites[i].rows[-1] for i in keys], dtype=int)
+            start = p.q_cmd[rows] - np.array(list(approach.values())) * self.approach_margin
+            approach_literal = dict(zip(keys, jointtarget_literals(np.degrees(start),
+                                                                   t.extax[rows])))
+        if not inter and not approach:
             self._emit_joints(joint_sites, dest_literal)
             self._flush_declarations()
             return self._expected()
@@ -548,17 +608,17 @@ class _Rewriter:
             motion = site.motion
             stem = _stem(site, len(site.targets) - 1)
             name = jointtarget_name(stem, literal, site)
+            indent = _indent_before(self.program, motion.syntax.start)
+            sep = "\n" + indent if indent is not None else " "
+            drops = [(op.argument.start, op.argument.end, "")
+                     for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
+            lines = []
             if i in inter:
                 lo, hi = inter[i]
-                indent = _indent_before(self.program, motion.syntax.start)
-                sep = "\n" + indent if indent is not None else " "
-                drops = [(op.argument.start, op.argument.end, "")
-                         for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
                 zone = motion.zone
                 zone_value = zone.argument.value if zone is not None else None
                 zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
                              if zone_value is not None else [])
-                lines = []
                 for j in range(hi - lo):
                     sub = jointtarget_name(f"{stem}_{j + 1}", literals[inter_start + j], site)
                     self.inserted.add(sub)
@@ -568,6 +628,12 @@ class _Rewriter:
                     ident = add_statement(motion.module, motion.routine, variant)
                     self.inter_checks.append((ident, segment_of[i], lo + j))
                 inter_start += hi - lo
+            if i in approach:  # stands still there (fine), then arrives from one side
+                sub = jointtarget_name(f"{stem}_app", approach_literal[i], site)
+                self.inserted.add(sub)
+                lines.append(_statement_variant(self.program, motion,
+                                                _joint_edits(site, sub) + drops) + sep)
+            if lines:
                 self.editor.insert(motion.syntax.start, "".join(lines))
             statement = _joint_statement(program_text, site, name)
             starts.append(motion.syntax.start)

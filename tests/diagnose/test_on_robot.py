@@ -25,6 +25,8 @@ from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 
 CASES = [
     (("joint_compliance",), 3),
+    (("tool_offset",), 2),
+    (("tool_offset",), 3),
     (("backlash",), 3),
     (("joint_coupling",), 7),
     (("registration_scale",), 3),
@@ -33,8 +35,8 @@ CASES = [
 ]
 
 
-def _loop(cell, effects, seed):
-    data, _model, result = cell.scenario(effects, seed)
+def _loop(cell, effects, seed, n_calibration=60, approach=False):
+    data, _model, result = cell.scenario(effects, seed, n_calibration)
     robot = data.robot.robot
     folder = tempfile.mkdtemp()
     path = os.path.join(folder, "model.json")
@@ -45,7 +47,7 @@ def _loop(cell, effects, seed):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)
         rewritten = rewrite_source(program.text.encode(), "loop.mod", comp,
-                                   RewriteOptions(temperature_c=temp))
+                                   RewriteOptions(temperature_c=temp, approach=approach))
     vr = data.robot
     before = run_on_robot(vr, program, program.text, set(), temp)
     after = run_on_robot(vr, program, rewritten.data.decode(), rewritten.inserted, temp)
@@ -70,3 +72,21 @@ def test_the_diagnosed_model_compensates_a_real_program(cell, effects, seed):
         predicted, before.mean_mm)
     # and where it says the compensated moves land is where they land, to the floor
     assert rewritten.worst_predicted_mm < 1e-3
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [2, 3])
+def test_approach_points_take_the_backlash_of_unknown_starts(cell, seed):
+    # Without approach points the first move of the routine starts where the program
+    # cannot say, and is taken midway between the directions: off by up to half the
+    # play. With them every joint with play arrives moving up, as compensated.
+    _, plain, _, without, floor = _loop(cell, ("backlash",), seed)
+    _, rewritten, _, with_approach, _ = _loop(cell, ("backlash",), seed, approach=True)
+    assert with_approach.mean_mm <= 1.5 * floor, (with_approach.mean_mm, floor)
+    assert with_approach.error_mm.max() < 0.5 * without.error_mm.max()
+    assert with_approach.mean_mm < without.mean_mm
+    text = rewritten.data.decode()
+    assert "options: approach=fine_points" in text
+    # one approach point before each compensated MoveJ fine point, none for MoveL/MoveC
+    movej = plain.data.decode().count("v500, fine")
+    assert len(rewritten.inserted - plain.inserted) == movej > 0

@@ -120,6 +120,19 @@ class LinkGeometry(VectorEffect):
         self.robot = str(robot)
         self.modes = modes
 
+    def add_modes(self, columns: np.ndarray, amplitudes: np.ndarray,
+                  std: np.ndarray | None = None) -> None:
+        """Append modes (26, m) with their amplitudes (and standard deviations)."""
+        columns = np.asarray(columns, dtype=float).reshape(N_ERRORS, -1)
+        m, k = columns.shape[1], self.modes.shape[1]
+        self.modes = np.hstack([self.modes, columns])
+        self._names = (*self._names, *(f"mode{k + i + 1}_mm" for i in range(m)))
+        self.steps = np.concatenate([self.steps, np.full(m, 1e-3)])
+        self._p = np.concatenate([self._p, np.asarray(amplitudes, dtype=float)])
+        if self.uncertainty is not None:
+            extra = np.zeros(m) if std is None else np.asarray(std, dtype=float)
+            self.uncertainty = np.concatenate([np.asarray(self.uncertainty, float), extra])
+
     def errors(self) -> np.ndarray:
         """The 26 physical errors (see `error_names`) of the current amplitudes."""
         return self.modes @ self._p
