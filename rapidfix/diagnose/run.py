@@ -16,7 +16,7 @@ from pathlib import Path
 
 from rapidfix.diagnose.candidates import CANDIDATES
 from rapidfix.diagnose.data import measured_points, noise_sigma_mm, with_known_history
-from rapidfix.diagnose.flange_gauge import resolve_flange_gauge
+from rapidfix.diagnose.gauges import resolve_flange_gauge
 from rapidfix.diagnose.report import build_report, statement, trial_record
 from rapidfix.diagnose.selection import Selection, select
 from rapidfix.errors.fit_effects import MeasuredPoints
@@ -109,14 +109,17 @@ def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: Po
     sel = select(model, robot, cal, val, default_payload_kg=setup.payload_kg,
                  noise_sigma_mm=sigma, candidates=candidates, progress=progress)
     extended = extended_model(model, sel, data_files)
-    gauge = resolve_flange_gauge(extended, robot, cal) if sel.accepted else None
-    if gauge is not None:
-        extended.statistics["diagnosis"]["flange_gauge"] = gauge.describe()
+    unseen = []
+    if sel.accepted:
+        change = resolve_flange_gauge(extended, robot, cal)
+        if change is not None:
+            extended.statistics["diagnosis"]["flange_gauge"] = change.describe()
+            unseen.append(change.describe())
     notes = [f"Fitted on {len(cal)} calibration points only; the {len(val)} validation "
              "points are only predicted.",
              *_history_note(len(calibration) - len(cal), "calibration", "fitted"),
              *_history_note(len(validation) - len(val), "validation", "scored"),
-             *([gauge.describe()] if gauge is not None else [])]
+             *unseen]
     report = build_report(sel, robot, cal, val, noise_source=source, title=title, notes=notes)
     return Diagnosis(sel, extended, report, statement(sel), cal, val)
 

@@ -6,7 +6,7 @@ Per-joint models (every effect separable, no geometry change): each joint solves
 
 Any other model: the general solve finds θc with actual_flange(θc) = T(θ_ideal),
 the tool0 pose the nominal robot reaches at θ_ideal, by damped least squares
-(Newton) on the full forward model, seeded by θ_ideal − Δθ(θ_ideal). Matching
+(Levenberg–Marquardt) on the full forward model, seeded by θ_ideal − Δθ(θ_ideal). Matching
 tool0's whole pose matches every rigid tool's TCP too, so no tool enters the
 solve. New effects are compensated by this solve without new code. Effects that
 describe the measurement (tracker frame and scale, target-ball offset) never act
@@ -161,6 +161,11 @@ def solve_general(
     step = np.full(n, np.inf)
     iterations = 0
     eye = np.eye(6)
+    # Levenberg–Marquardt per row: a step that raises the pose error is taken back and
+    # retried with more damping (near a singular arm the plain Newton step runs away)
+    damping = np.full(n, _DAMPING)
+    best_q, best_cost = q.copy(), np.full(n, np.inf)
+    kept_err, kept_jac = np.zeros((n, 6)), np.zeros((n, 6, 6))
     while iterations < max_iter and np.any(step > tol):
         iterations += 1
         active = np.flatnonzero(step > tol)  # converged poses are left alone
@@ -168,16 +173,28 @@ def solve_general(
         current, jac = model.flange_and_jacobian(robot, q[active], sub_ctx)
         err = _pose_error(target[active], current) * scale
         a = jac * scale[None, :, None]
+        cost = np.einsum("ij,ij->i", err, err)
+        worse = ~(cost <= best_cost[active] * (1.0 + 1e-9) + 1e-30)
+        back, ahead = active[worse], active[~worse]
+        q[back] = best_q[back]
+        damping[back] = np.maximum(damping[back] * 100.0, 1e-10)
+        err[worse], a[worse] = kept_err[back], kept_jac[back]
+        best_q[ahead], best_cost[ahead] = q[ahead], cost[~worse]
+        kept_err[ahead], kept_jac[ahead] = err[~worse], a[~worse]
+        damping[ahead] = np.maximum(damping[ahead] / 10.0, _DAMPING)
         at = np.swapaxes(a, 1, 2)
-        dq = np.linalg.solve(at @ a + _DAMPING * eye, (at @ err[:, :, None]))[:, :, 0]
+        lhs = at @ a + damping[active][:, None, None] * eye
+        dq = np.linalg.solve(lhs, (at @ err[:, :, None]))[:, :, 0]
         finite = np.isfinite(dq).all(axis=1)
         dq[~finite] = 0.0
         q[active] += dq
         step[active] = np.where(finite, np.abs(dq).max(axis=1), np.nan)
+        step[back] = np.where(step[back] <= tol, 2.0 * tol, step[back])  # not converged yet
         if not finite.all():  # a singular Jacobian: report the row, never iterate on NaN
             step[active[~finite]] = np.inf
             break
     converged = step <= tol
+    q = np.where(converged[:, None], q, best_q)  # an unfinished row: its best iterate
     return CompensationResult(q, converged, np.degrees(step), "general", iterations)
 
 

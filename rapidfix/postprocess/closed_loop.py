@@ -63,12 +63,42 @@ def _tuple(values: Any) -> str:
     return ",".join(f"{v:.9g}" for v in values)
 
 
+def measured_range(model: Any) -> np.ndarray | None:
+    """(6, 2) rad: the joint ranges the model's per-joint curves were measured over
+    (NaN rows: not measured), or None when it has none."""
+    ranges = [np.asarray(e.valid_range) for e in model.effects if hasattr(e, "valid_range")]
+    return ranges[0] if ranges else None
+
+
+#: a cell keeps its arm at least this far from stretched (the elbow singularity), deg
+ELBOW_MARGIN_DEG = 5.0
+
+
+def _elbow_bent(robot: Any, q: np.ndarray) -> np.ndarray:
+    """Poses (mask) whose elbow is bent by more than ELBOW_MARGIN_DEG: a stretched arm
+    is at the edge of its reach, where a real arm a little shorter than the nominal
+    one cannot reach a target at all."""
+    _, points = robot.joint_frames(q)
+    upper = points[:, 2] - points[:, 1]
+    fore = points[:, 4] - points[:, 2]
+    sine = np.linalg.norm(np.cross(upper, fore), axis=1) / (
+        np.linalg.norm(upper, axis=1) * np.linalg.norm(fore, axis=1))
+    return sine > np.sin(np.radians(ELBOW_MARGIN_DEG))
+
+
 def pick_and_place(robot: Any, seed: int, *, moves: int = 24,
-                   smr_offset_mm: np.ndarray | None = None) -> LoopProgram:
-    """A cell program of about `moves` moves (see the module doc), reproducible from `seed`."""
+                   smr_offset_mm: np.ndarray | None = None,
+                   ranges: np.ndarray | None = None) -> LoopProgram:
+    """A cell program of about `moves` moves (see the module doc), reproducible from
+    `seed`, its joints within `ranges` (6, 2) rad where given (a cell works where its
+    robot was measured)."""
     rng = np.random.default_rng([seed, 13])
     ball = np.zeros(3) if smr_offset_mm is None else np.asarray(smr_offset_mm, dtype=float)
-    q = point_plan(robot, ball, moves + moves // 4 + 2, seed=seed)
+    if ranges is not None:
+        ranges = np.where(np.isnan(ranges), robot.limits, ranges)
+    want = moves + moves // 4 + 2
+    q = point_plan(robot, ball, 2 * want, seed=seed, ranges=ranges)
+    q = q[_elbow_bent(robot, q)][:want]
     wobj = _frame(WOBJ[1], WOBJ[2])
     tools = [_frame(t[1], t[2]) for t in TOOLS]
     kinds, tool_of, grip = [], [], []
@@ -183,18 +213,20 @@ def demo_on_robot(cell: str | Path, models: dict[str, str | Path], out: str | Pa
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     virtual = VirtualRobot.from_truth(json.loads((Path(cell) / "truth.json").read_text()))
-    program = pick_and_place(virtual.robot, seed, smr_offset_mm=virtual.smr_offset_mm)
+    comps = {label: Compensator.load(path) for label, path in models.items()}
+    ranges = next((measured_range(c.model) for c in comps.values()), None)
+    program = pick_and_place(virtual.robot, seed, smr_offset_mm=virtual.smr_offset_mm,
+                             ranges=ranges)
     source = out / "cell_loop.mod"
     write_text_atomic(source, program.text)
     floor = virtual.noise_floor(program.q)["mean_tcp_error_mm"]
     rows = {"as programmed": (run_on_robot(virtual, program, program.text, set()).mean_mm,
                               None)}
-    for label, path in models.items():
-        comp = Compensator.load(path)
+    for label, comp in comps.items():
         with warnings.catch_warnings():  # the demo's moves stay within the sweeps
             warnings.simplefilter("ignore", OutsideRangeWarning)
             result = rewrite_file(source, out / f"cell_loop.{label}.mod", comp,
-                                  RewriteOptions(force=True))
+                                  RewriteOptions(force=True, approach=True))
         run = run_on_robot(virtual, program, result.data.decode(), result.inserted)
         rows[label] = (run.mean_mm, result.predicted_before_mm)
     return {"program": str(source), "moves": len(program.q), "noise_floor_mm": floor,

@@ -92,12 +92,14 @@ def tcp_on(execution: Execution, flange: np.ndarray) -> np.ndarray:
 
 
 def align_axis1(robot: Any, actual: np.ndarray, intended: np.ndarray) -> np.ndarray:
-    """`actual` positions (K,3) turned about axis 1 by the angle that fits `intended` best.
+    """`actual` positions (K,3) turned about axis 1 and moved along it by the angle and
+    height that fit `intended` best.
 
-    A constant joint-1 error cannot be told from the robot's placement in the cell:
-    targets taught or measured in the cell absorb it, and neither a tracker nor a
-    fitted model can see it. Positions are therefore compared in the best joint-1
-    gauge (a closed-form rotation about the axis-1 line, one parameter per run).
+    A constant joint-1 error, and the arm's height along axis 1, cannot be told from
+    the robot's placement in the cell: targets taught or measured in the cell absorb
+    them, and neither a tracker fitted with the points nor a model can see them.
+    Positions are therefore compared in the best gauge of the base (a closed-form
+    rotation about the axis-1 line and a shift along it, two parameters per run).
     """
     actual = np.asarray(actual, dtype=float)
     intended = np.asarray(intended, dtype=float)
@@ -113,4 +115,6 @@ def align_axis1(robot: Any, actual: np.ndarray, intended: np.ndarray) -> np.ndar
     xi, yi = pi @ u, pi @ v
     angle = np.arctan2(np.sum(xa * yi - ya * xi), np.sum(xa * xi + ya * yi))
     c, s = np.cos(angle), np.sin(angle)
-    return a + np.outer(c * xa - s * ya, u) + np.outer(s * xa + c * ya, v) + np.outer(pa @ w, w)
+    height = float(np.mean((pi - pa) @ w))
+    return (a + np.outer(c * xa - s * ya, u) + np.outer(s * xa + c * ya, v)
+            + np.outer(pa @ w + height, w))

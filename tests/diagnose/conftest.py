@@ -8,6 +8,8 @@ calibration and validation points.
 
 from __future__ import annotations
 
+import os
+import tempfile
 import warnings
 from functools import cache
 from types import SimpleNamespace
@@ -18,8 +20,12 @@ import pytest
 from rapidfix.diagnose.run import diagnose
 from rapidfix.errors.fit import fit_error_model
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
+from rapidfix.errors.model_file import save_model
 from rapidfix.measure.registration import rigid_fit
 from rapidfix.measure.sweeps import analyse_sweeps
+from rapidfix.postprocess.closed_loop import measured_range, pick_and_place, run_on_robot
+from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.sim import VirtualRobot, simulate_set
 from rapidfix.sim.virtual_robot import RunConditions
 
@@ -83,7 +89,49 @@ def detectable_seeds(
     return seeds
 
 
+def loop(effects: tuple[str, ...], seed: int, n_calibration: int = 60, *,
+         approach: bool = True):
+    """The loop on the robot for a scenario: its diagnosed model saved and loaded, a
+    pick-and-place program (within the measured joint ranges) rewritten with it and
+    run, as written and as rewritten, on the scenario's virtual robot.
+
+    Returns (diagnosis, rewrite result, run before, run after, noise floor mm).
+    """
+    data, _model, result = scenario(effects, seed, n_calibration)
+    robot = data.robot.robot
+    path = os.path.join(tempfile.mkdtemp(), "model.json")
+    save_model(result.model, path)
+    comp = Compensator.load(path)
+    program = pick_and_place(robot, seed, smr_offset_mm=data.setup.smr_offset_mm,
+                             ranges=measured_range(comp.model))
+    temp = None if data.validation.temp_c is None else float(np.mean(data.validation.temp_c))
+    rewritten = rewrite_source(program.text.encode(), "loop.mod", comp,
+                               RewriteOptions(temperature_c=temp, approach=approach))
+    vr = data.robot
+    before = run_on_robot(vr, program, program.text, set(), temp)
+    after = run_on_robot(vr, program, rewritten.data.decode(), rewritten.inserted, temp)
+    floor = vr.noise_floor(program.q)["mean_tcp_error_mm"]
+    return result, rewritten, before, after, floor
+
+
+def check_on_robot(effects: tuple[str, ...], seed: int, n_calibration: int = 60, *,
+                   limit: float = 1.5) -> None:
+    """The diagnosed model compensates a real program: every move compensated, the
+    robot lands within `limit` × the noise floor having started far off, and the
+    error the rewrite predicts for the program as written is the executed one."""
+    _, rewritten, before, after, floor = loop(effects, seed, n_calibration)
+    assert rewritten.moves_compensated == rewritten.moves_total, rewritten.report_lines()
+    assert after.mean_mm <= limit * floor, (effects, seed, after.mean_mm, floor)
+    assert before.mean_mm > 4 * floor, (effects, seed, before.mean_mm, floor)
+    predicted = rewritten.predicted_before_mm[0]
+    assert abs(predicted - before.mean_mm) <= 0.25 * before.mean_mm + 2 * floor, (
+        effects, seed, predicted, before.mean_mm)
+    assert rewritten.worst_predicted_mm < 1e-3
+
+
 @pytest.fixture(scope="session")
 def cell():
-    """The scenario helpers: `cell.scenario(effects, seed)`, `cell.detectable_seeds(...)`."""
-    return SimpleNamespace(scenario=scenario, detectable_seeds=detectable_seeds)
+    """The scenario helpers: `cell.scenario(effects, seed)`, `cell.detectable_seeds(...)`,
+    `cell.loop(...)` and `cell.check_on_robot(...)` (the loop on the robot)."""
+    return SimpleNamespace(scenario=scenario, detectable_seeds=detectable_seeds, loop=loop,
+                           check_on_robot=check_on_robot)

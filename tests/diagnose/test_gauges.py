@@ -1,4 +1,4 @@
-"""One target ball does not show how the flange turns about it (rapidfix.diagnose.flange_gauge).
+"""One target ball does not show how the flange turns about it (rapidfix.diagnose.gauges).
 
 Truth from the virtual robot: the flange's real orientation, which the measured
 points never show, is compared with the diagnosed model's at poses the data never
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rapidfix.diagnose.flange_gauge import resolve_flange_gauge
+from rapidfix.diagnose.gauges import resolve_flange_gauge
 from rapidfix.errors.fit_effects import predict
 from rapidfix.sim.plans import point_plan
 

@@ -1,23 +1,26 @@
-"""What one target ball cannot see: how the flange is turned about the ball.
+"""What the measurements cannot see, set by the physical size of each term.
 
-Points measured on a single ball fix where that ball goes, not how the flange is
-turned. When the diagnosis frees a translation in the flange (a `tool_offset`,
-or tool0's home pose in `link_geometry`), some changes of the model move no
-measured point at all:
+Points measured on a single target ball by a tracker whose pose is fitted with
+them leave some changes of a model invisible: they move no measured point. The
+least-squares fit leaves these directions wherever its parameterisation happens
+to put them, yet a program feels them. The data cannot decide, so physics does:
+the model is moved along each such direction to its most probable point under
+Gaussian priors of the terms' physical sizes (maximum a posteriori), checking
+that no measured point moves.
 
-- turning joint 6's zero by t together with moving the ball by −t a₆ × b;
-- with link geometry, turning tool0's home orientation by ω (flange frame)
-  together with moving it by −ω × b.
+- **The flange's turn about the ball** (`resolve_flange_gauge`). When the
+  diagnosis frees a translation in the flange (a `tool_offset`, or tool0's home
+  pose in `link_geometry`), turning joint 6's zero by t together with moving the
+  ball by −t a₆ × b, and (with link geometry) turning tool0's home by ω together
+  with moving it by −ω × b, are invisible. The per-joint sweeps, analysed with the
+  declared ball, put a ball's tangential error into joint 6's zero; a program's
+  tools sit elsewhere on the flange and feel that turn in full (0.1° is 0.3 mm at
+  a 160 mm TCP). Two or more ball positions on the flange measure it instead.
 
-The least-squares fit leaves these directions wherever its parameterisation
-happens to put them (the per-joint sweeps, analysed with the declared ball, put
-a ball's tangential error into joint 6's zero). A program's tools sit elsewhere
-on the flange and feel that turn in full: 0.1° is 0.3 mm at a 160 mm TCP. The
-data cannot decide, so physics does: the model is moved along those directions
-to the most probable split under Gaussian priors of the physical sizes below
-(maximum a posteriori). The measured points stay where they were predicted
-(checked); only what the ball cannot see changes. Two or more ball positions
-on the flange determine it from data instead.
+Not set here: with link geometry, moving every joint axis (2–6) and tool0 along
+axis 1, and the tracker the other way, is invisible too (the arm's height above
+its base); it is a gauge of the base like joint 1's zero, which work objects
+taught or measured in the cell absorb.
 """
 
 from __future__ import annotations
@@ -151,3 +154,4 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
 
 def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
