@@ -34,6 +34,8 @@ _MAX_ITER = 60
 #: rows of the pose error in mm are divided by this to balance them against radians
 _LENGTH_SCALE_MM = 1000.0
 _DAMPING = 1e-14
+#: squared scaled pose error of a pose that matches to round-off (1e-9 rad, 1e-6 mm)
+_MATCHED_COST = 1e-18
 CHUNK = 4096
 """Poses per chunk of the per-joint solve: its temporaries stay in the cache."""
 
@@ -147,7 +149,10 @@ def solve_general(
     Matching tool0's whole pose matches the pose of every rigid tool on it, so one
     solve serves any mix of tools and work objects. Each row is solved on its own
     (rows that have converged are left alone); the context is taken row by row
-    with them, after the motion directions have been fixed over all rows.
+    with them, after the motion directions have been fixed over all rows. Rows the
+    plain Newton step does not settle (near a stretched or folded arm, where it runs
+    away) are solved again by Levenberg–Marquardt, which takes back any step that
+    raises the pose error.
     """
     q_ideal = _ideal(q_ideal)
     n = q_ideal.shape[0]
@@ -156,13 +161,30 @@ def solve_general(
     ctx = ctx.with_directions(q_ideal)
     tol = np.radians(tol_deg)
     target = robot.fk(q_ideal)
-    q = q_ideal - model.delta(q_ideal, ctx)  # the per-joint answer: a close seed
+    seed = q_ideal - model.delta(q_ideal, ctx)  # the per-joint answer: a close seed
+    q, step, iterations = _newton(model, robot, target, seed.copy(), ctx, tol, max_iter,
+                                  guarded=False)
+    again = np.flatnonzero(~(step <= tol))
+    if again.size:
+        sub = ctx if again.size == n else ctx.take(again)
+        q2, step2, more = _newton(model, robot, target[again], seed[again], sub, tol,
+                                  max_iter, guarded=True)
+        q[again], step[again] = q2, step2
+        iterations += more
+    converged = step <= tol
+    return CompensationResult(q, converged, np.degrees(step), "general", iterations)
+
+
+def _newton(model: ErrorModel, robot: Any, target: np.ndarray, q: np.ndarray, ctx: Context,
+            tol: float, max_iter: int, *, guarded: bool) -> tuple[np.ndarray, np.ndarray, int]:
+    """Newton iterations on every row until its joint step is within `tol`; with
+    `guarded`, Levenberg–Marquardt: a step that raises the row's pose error is taken
+    back and retried with more damping, and an unfinished row returns its best iterate."""
+    n = q.shape[0]
     scale = np.array([1.0, 1.0, 1.0] + [1.0 / _LENGTH_SCALE_MM] * 3)
     step = np.full(n, np.inf)
     iterations = 0
     eye = np.eye(6)
-    # Levenberg–Marquardt per row: a step that raises the pose error is taken back and
-    # retried with more damping (near a singular arm the plain Newton step runs away)
     damping = np.full(n, _DAMPING)
     best_q, best_cost = q.copy(), np.full(n, np.inf)
     kept_err, kept_jac = np.zeros((n, 6)), np.zeros((n, 6, 6))
@@ -173,15 +195,17 @@ def solve_general(
         current, jac = model.flange_and_jacobian(robot, q[active], sub_ctx)
         err = _pose_error(target[active], current) * scale
         a = jac * scale[None, :, None]
-        cost = np.einsum("ij,ij->i", err, err)
-        worse = ~(cost <= best_cost[active] * (1.0 + 1e-9) + 1e-30)
-        back, ahead = active[worse], active[~worse]
-        q[back] = best_q[back]
-        damping[back] = np.maximum(damping[back] * 100.0, 1e-10)
-        err[worse], a[worse] = kept_err[back], kept_jac[back]
-        best_q[ahead], best_cost[ahead] = q[ahead], cost[~worse]
-        kept_err[ahead], kept_jac[ahead] = err[~worse], a[~worse]
-        damping[ahead] = np.maximum(damping[ahead] / 10.0, _DAMPING)
+        back = active[:0]
+        if guarded:
+            cost = np.einsum("ij,ij->i", err, err)
+            worse = ~(cost <= best_cost[active] * (1.0 + 1e-9) + 1e-30)
+            back, ahead = active[worse], active[~worse]
+            q[back] = best_q[back]
+            damping[back] = np.maximum(damping[back] * 100.0, 1e-10)
+            err[worse], a[worse] = kept_err[back], kept_jac[back]
+            best_q[ahead], best_cost[ahead] = q[ahead], cost[~worse]
+            kept_err[ahead], kept_jac[ahead] = err[~worse], a[~worse]
+            damping[ahead] = np.maximum(damping[ahead] / 10.0, _DAMPING)
         at = np.swapaxes(a, 1, 2)
         lhs = at @ a + damping[active][:, None, None] * eye
         dq = np.linalg.solve(lhs, (at @ err[:, :, None]))[:, :, 0]
@@ -189,13 +213,15 @@ def solve_general(
         dq[~finite] = 0.0
         q[active] += dq
         step[active] = np.where(finite, np.abs(dq).max(axis=1), np.nan)
-        step[back] = np.where(step[back] <= tol, 2.0 * tol, step[back])  # not converged yet
+        # a step taken back converges only where the pose already matches (round-off)
+        unfinished = (step[back] <= tol) & (best_cost[back] > _MATCHED_COST)
+        step[back] = np.where(unfinished, 2.0 * tol, step[back])
         if not finite.all():  # a singular Jacobian: report the row, never iterate on NaN
             step[active[~finite]] = np.inf
             break
-    converged = step <= tol
-    q = np.where(converged[:, None], q, best_q)  # an unfinished row: its best iterate
-    return CompensationResult(q, converged, np.degrees(step), "general", iterations)
+    if guarded:
+        q = np.where((step <= tol)[:, None], q, best_q)
+    return q, step, iterations
 
 
 def solve_compensation(

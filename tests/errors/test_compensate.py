@@ -190,3 +190,34 @@ def test_chunks_of_poses_give_what_one_pass_gives(joint_model):
     assert np.abs(residual).max() <= TOL
     shared = solve_per_joint(model, q_ideal, Context.from_rows(q_ideal), chunk=7)
     assert np.abs(shared.q_cmd - parts.q_cmd).max() > np.radians(0.01)  # the context matters
+
+
+class ShortForearm(AxisTilt):
+    """Test effect: joints 4-6 and tool0 sit `short` mm nearer joint 3 (a geometry change)."""
+
+    type_name: ClassVar[str] = "test_short_forearm"
+
+    def apply_geometry(self, geometry: Geometry, q_cmd, ctx):
+        points = geometry.axis_points.copy()
+        points[3:, 0] -= self.tilt
+        home = geometry.home.copy()
+        home[:3, 3] -= [self.tilt, 0.0, 0.0]
+        return geometry.replaced(axis_points=points, home=home)
+
+
+def test_general_solve_does_not_run_away_at_a_stretched_elbow(joint_model):
+    # Joint 3 at -90° stretches the arm (the elbow singularity): a target there lies
+    # beyond the reach of a forearm 0.3 mm short. The solve cannot match it, but it
+    # must stay near (its best iterate), not wander off along the singular direction.
+    model = ErrorModel(ROBOT.name, [*joint_model.effects, ShortForearm(tilt=0.3)])
+    q_ideal = np.radians([[-52.0, -3.5, -90.2, -125.7, -98.8, -42.4],
+                          [20.0, 10.0, -90.0, 30.0, 40.0, 10.0]])
+    res = solve_compensation(model, ROBOT, q_ideal)
+    seed = q_ideal - model.delta(q_ideal)
+    assert np.degrees(np.abs(res.q_cmd - q_ideal)).max() < 1.0
+    target = ROBOT.fk(q_ideal)[:, :3, 3]
+    reached = model.actual_flange(ROBOT, res.q_cmd)[:, :3, 3]
+    from_seed = model.actual_flange(ROBOT, seed)[:, :3, 3]
+    # the pose error it minimises weighs the turn too: the position stays as close
+    assert np.all(np.linalg.norm(reached - target, axis=1)
+                  <= np.linalg.norm(from_seed - target, axis=1) + 0.05)
