@@ -280,7 +280,7 @@ def write_plan(plan: Plan, out_dir: str | Path, *, program_name: str = "measure.
     lines += [f"{k} = {_toml_value(v)}" for k, v in meta.items()]
     if plan.cube is not None:
         lines += ["", "[iso9283]", f"centre_mm = {_toml_value(plan.cube.centre_mm.tolist())}",
-                  f"side_mm = {plan.cube.side_mm!r}", f"cycles = {st.iso_cycles}"]
+                  f"side_mm = {float(plan.cube.side_mm)!r}", f"cycles = {st.iso_cycles}"]
     write_text_atomic(paths["plan"], "\n".join(lines) + "\n")
     return paths
 

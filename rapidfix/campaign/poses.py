@@ -297,7 +297,7 @@ def iso_cube(robot: RobotModel, smr_mm: np.ndarray, *, envelope: Envelope | None
         if view is not None:
             ok &= view.visible(robot, np.nan_to_num(q), smr)
         if np.all(ok):
-            return IsoCube(centre, side, axes, pts, R, q, robot.confdata(q))
+            return IsoCube(centre, float(side), axes, pts, R, q, robot.confdata(q))
         if side_mm is not None:
             bad = [f"P{k + 1}" for k in np.flatnonzero(~ok)]
             raise RapidfixError(f"ISO cube of side {side:g} mm: {', '.join(bad)} cannot be "
