@@ -65,7 +65,7 @@ def _by_id(export: TrackerExport, table: PoseTable, problems: list) -> tuple[np.
     seen: dict[int, int] = {}
     t_rows, e_rows = [], []
     last = -1
-    for i, pid in enumerate(export.ids):
+    for i, pid in enumerate(export.ids.tolist()):
         k = index.get(pid)
         if k is None:
             problems.append(_problem(export, i, "id", f"point id {pid!r} is not in the pose "

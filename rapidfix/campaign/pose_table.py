@@ -45,7 +45,7 @@ class PoseTable:
 
     def index(self) -> dict[str, int]:
         """Row index of each point id."""
-        return {pid: i for i, pid in enumerate(self.point_id)}
+        return {str(pid): i for i, pid in enumerate(self.point_id)}
 
 
 def write_pose_table(path: str | Path, table: PoseTable) -> Path:
