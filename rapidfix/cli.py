@@ -27,6 +27,7 @@ COMMANDS: tuple[str, ...] = (
     "plan",
     "simulate",
     "import_tracker",
+    "iso9283",
     "fit",
     "diagnose",
     "rewrite",
