@@ -1,6 +1,11 @@
 """A matched tracker export as measurement files: sweeps, calibration, validation and
 ISO 9283 tables in the project's format (`rapidfix.measure.files`), rows in the
-pose table's (execution) order."""
+pose table's (execution) order.
+
+When the program made approach moves, every table gets the pose table's
+`approach` and `approach_joints` columns: the rows' order alone would give the
+wrong direction of arrival for the joints such a move turned, and the sweep
+analysis reads them (backlash)."""
 
 from __future__ import annotations
 
@@ -32,6 +37,7 @@ def measurement_tables(match: Matching, table: PoseTable, export: TrackerExport
     xyz = match.xyz_mm[order]
     payload_varies = bool(np.any(table.payload_kg != table.payload_kg[0])
                           or table.payload_kg[0] != 0)
+    approached = bool(np.any(table.ints["approach"] != 0))
     out: dict[str, SweepTable | PointTable] = {}
     for name in FILES:
         sel = table.set_name[rows_t] == name
@@ -44,15 +50,18 @@ def measurement_tables(match: Matching, table: PoseTable, export: TrackerExport
             "temp_c": None if export.temp_c is None else export.temp_c[e],
         }
         file_rows = np.arange(len(t)) + 2
+        extra = {}
+        if approached:  # which joints an approach move turned (rapidfix.measure.sweeps)
+            extra = {"approach": table.ints["approach"][t].astype(float),
+                     "approach_joints": table.ints["approach_joints"][t].astype(float)}
         if name == "sweep":
             out[name] = SweepTable(sweep_joint=table.ints["sweep_joint"][t] - 1, q=table.q[t],
                                    repeat=table.ints["repeat"][t], xyz=xyz[sel], rows=file_rows,
-                                   **cond)
+                                   extra=extra, **cond)
         else:
-            extra = {}
             if name == "iso9283":
-                extra = {"cycle": table.ints["cycle"][t].astype(float),
-                         "iso_pose": table.ints["iso_pose"][t].astype(float)}
+                extra.update({"cycle": table.ints["cycle"][t].astype(float),
+                              "iso_pose": table.ints["iso_pose"][t].astype(float)})
             out[name] = PointTable(point_id=table.point_id[t], q=table.q[t], xyz=xyz[sel],
                                    rows=file_rows, extra=extra, **cond)
     return out

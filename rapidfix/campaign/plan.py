@@ -97,7 +97,8 @@ def _approach_poses(robot: RobotModel, q: np.ndarray, side: np.ndarray,
 
     A joint's side is the direction of its last motion; an approach pose q − step·side
     (within the limits) is inserted before a pose whenever some joint would otherwise
-    arrive from the other side or keep the other side from an earlier move.
+    arrive from the other side or keep the other side from an earlier move. A joint
+    at its limit cannot be approached from beyond it and keeps the side it came from.
     """
     out = np.full_like(q, np.nan)
     state = np.zeros(6)
@@ -166,13 +167,16 @@ def make_plan(robot: RobotModel, settings: PlanSettings) -> Plan:
         side = np.zeros_like(side)
     approach = _approach_poses(robot, q, side, np.radians(st.approach_deg))
     pause = np.r_[payload[0] != 0.0, payload[1:] != payload[:-1]]
+    has_app = ~np.isnan(approach[:, 0])
+    # which joints each approach move turns (bit j-1 for joint j): they arrive from its side
+    moved = has_app[:, None] & (np.abs(np.nan_to_num(approach) - q) > 1e-12)
+    approach_joints = moved.astype(int) @ (1 << np.arange(6))
 
     _check(robot, smr, st, ids, sets, q, approach, cube)
 
     m = st.program.motion
     home = np.zeros(6)
     prev = np.vstack([home, q[:-1]])
-    has_app = ~np.isnan(approach[:, 0])
     via = np.where(has_app[:, None], approach, prev)
     move_s = (move_durations(robot, prev, via, m, tool_mm=smr)
               + move_durations(robot, via, q, m, tool_mm=smr) + pause * st.pause_s)
@@ -184,8 +188,9 @@ def make_plan(robot: RobotModel, settings: PlanSettings) -> Plan:
     table = PoseTable(
         point_id=np.array(ids), set_name=sets, q=q, payload_kg=payload,
         ints={"sweep_joint": cat("sweep_joint"), "repeat": cat("repeat"),
-              "iso_pose": cat("iso_pose"), "cycle": cat("cycle"), "approach": side.astype(int),
-              "pause_before": pause.astype(int)},
+              "iso_pose": cat("iso_pose"), "cycle": cat("cycle"),
+              "approach": np.where(has_app, side, 0).astype(int),
+              "approach_joints": approach_joints, "pause_before": pause.astype(int)},
         times={"t_arrive_s": sched.arrive_s, "t_trigger_s": sched.trigger_s,
                "t_leave_s": sched.leave_s}, rows=np.arange(len(ids)) + 2)
     counts = {str(name): int(np.sum(sets == name)) for name in dict.fromkeys(sets)}

@@ -1,8 +1,10 @@
 """The pose table: every measured pose of a campaign, in execution order (CSV).
 
 Columns: ``point_id,set,j1..j6,payload_kg`` then ``sweep_joint,repeat`` (sweeps),
-``iso_pose,cycle`` (ISO 9283 cube), ``approach`` (+1: every joint arrives moving
-up, −1: down, 0: as the previous move left it), ``pause_before`` (1 when the
+``iso_pose,cycle`` (ISO 9283 cube), ``approach`` (+1 or −1 when an approach move
+comes before the pose, 0 when none does), ``approach_joints`` (the joints that move
+turns, bit j−1 for joint j: they arrive moving up (+1) or down (−1); the others as
+the previous pose left them), ``pause_before`` (1 when the
 program stops for the operator before this pose, e.g. to change the payload) and
 the planned schedule ``t_arrive_s,t_trigger_s,t_leave_s`` (s from the start; the
 robot is settled in [t_trigger_s, t_leave_s]). Joints in degrees, payload kg.
@@ -21,7 +23,8 @@ from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import MeasurementError
 
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
-INT_COLUMNS = ("sweep_joint", "repeat", "iso_pose", "cycle", "approach", "pause_before")
+INT_COLUMNS = ("sweep_joint", "repeat", "iso_pose", "cycle", "approach", "approach_joints",
+               "pause_before")
 TIME_COLUMNS = ("t_arrive_s", "t_trigger_s", "t_leave_s")
 COLUMNS = ("point_id", "set", *JOINTS, "payload_kg", *INT_COLUMNS, *TIME_COLUMNS)
 SETS = ("sweep", "calibration", "validation", "iso9283")
@@ -125,5 +128,20 @@ def read_pose_table(path: str | Path) -> PoseTable:
     q = np.radians(np.column_stack([numbers(c) for c in JOINTS]))
     ints = {c: numbers(c, 0.0).astype(int) for c in INT_COLUMNS}
     times = {c: numbers(c, 0.0) for c in TIME_COLUMNS}
+    for set_name, column, low, high in (("sweep", "sweep_joint", 1, 6),
+                                        ("sweep", "repeat", 1, None),
+                                        ("iso9283", "iso_pose", 1, 5),
+                                        ("iso9283", "cycle", 1, None)):
+        values = ints[column]
+        bad = (sets == set_name) & ((values < low) | (values > (high or values.max())))
+        if bad.any():
+            i = int(np.argmax(bad))
+            span = f"{low}..{high}" if high else f"at least {low}"
+            raise MeasurementError(f"{set_name} rows need {column} {span}", file=path,
+                                   row=rows[i], column=column)
+    back = np.flatnonzero(np.diff(times["t_trigger_s"]) < 0)
+    if back.size:
+        raise MeasurementError("the schedule goes back in time: rows out of execution order",
+                               file=path, row=rows[int(back[0]) + 1], column="t_trigger_s")
     return PoseTable(ids.astype(str), sets.astype(str), q, numbers("payload_kg", 0.0), ints,
                      times, np.asarray(rows), path)

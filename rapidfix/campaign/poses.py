@@ -5,7 +5,8 @@ execution order and every random choice takes a seed.
 - Sweeps follow the source paper: each joint over its range in 5° steps, three
   repeats, the others held at a pose chosen so that the ball stays far from the
   swept axis, above the floor, out of keep-out boxes and in the tracker's view
-  (the longest such stretch of the range is kept).
+  (the longest such stretch of the range is kept); the virtual cell's hold
+  (0, 0, 0, 0, 45, 0)° is kept unless another gives >10 % more range × radius.
 - Calibration and validation points fill the work envelope: many random joint
   poses (Latin hypercube) are screened — joint limits, wrist singularity, floor,
   keep-outs, box, line of sight — and a farthest-point subset of the ball
@@ -32,6 +33,8 @@ from rapidfix.sim.plans import _longest_run, plausible_poses
 DEFAULT_HOLD_DEG = (0.0, 0.0, 0.0, 0.0, 45.0, 0.0)
 #: A ball this far (mm) from the swept axis or more draws a circle big enough.
 GOOD_RADIUS_MM = 50.0
+#: The default hold is kept while it scores at least this share of the best one.
+HOLD_PREFERENCE = 0.9
 WRIST_MIN_DEG = 15.0
 
 
@@ -111,7 +114,8 @@ def sweep_block(robot: RobotModel, smr_mm: np.ndarray, *, step_deg: float = 5.0,
         count = runs.sum(axis=1)
         r_min = np.where(runs, radius, np.inf).min(axis=1)
         score = count * np.minimum(1.0, np.where(count > 0, r_min, 0.0) / GOOD_RADIUS_MM)
-        best = int(np.argmax(score))
+        # the default hold (the virtual cell's) unless another is clearly better
+        best = 0 if score[0] >= HOLD_PREFERENCE * score.max() else int(np.argmax(score))
         if count[best] < 3:
             raise RapidfixError(f"joint {j1}: no held pose gives 3 sweep steps with the ball "
                                 "above the floor, out of the keep-out boxes and in view")

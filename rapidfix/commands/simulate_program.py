@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -91,9 +92,11 @@ def run_program_command(args: argparse.Namespace) -> int:
                             f"{len(table)}: are they from the same plan?", file=args.program)
     vr = VirtualRobot.create(robot, seed=args.seed, effects=tuple(dict.fromkeys(args.effect)),
                              smr_offset_mm=smr, payload_kg=args.payload)
+    # the noise of a run: from the seed and the program, so that a rewritten program run
+    # on the same robot gets noise of its own (a new run), reproducibly
+    noise = np.random.SeedSequence([args.seed, 16, zlib.crc32(program.to_bytes())])
     xyz, clock, temp = measure_run(vr, run, table.payload_kg,
-                                   seed=int(np.random.SeedSequence([args.seed, 16])
-                                            .generate_state(1)[0]),
+                                   seed=int(noise.generate_state(1)[0]),
                                    clock_offset_s=args.clock_offset)
     ids = None
     if not args.no_ids:

@@ -178,3 +178,41 @@ def test_export_of_another_plan_is_refused_by_its_distances(campaign, tmp_path, 
     path = edited(campaign, tmp_path, stretch)
     assert run_import(campaign, path, tmp_path / "o") == 1
     assert "not mm, m or inch" in one_line_error(capsys)
+
+
+def test_simulated_export_is_the_true_robot_seen_by_the_tracker_on_the_plans_clock(campaign):
+    import json
+
+    from rapidfix.campaign.pose_table import read_pose_table
+    from rapidfix.sim import VirtualRobot
+
+    table = read_pose_table(campaign / "plan/poses.csv")
+    truth = json.loads((campaign / "run/truth.json").read_text())
+    vr = VirtualRobot.from_truth(truth)
+    export = read_export(campaign / "run/tracker_export.csv")
+    assert list(export.ids) == list(table.point_id)
+    # the export's clock: the plan's trigger times (same timing model) after the offset,
+    # payload changes (Stop) taking the 60 s the plan allows for them
+    assert np.allclose(export.time_s - 36000.0, table.times["t_trigger_s"], atol=2e-3)
+    q_prev = np.vstack([np.zeros(6), table.q[:-1]])
+    ctx = {"payload_kg": table.payload_kg, "q_prev": q_prev}
+    p_robot = vr.ball_positions(table.q, ctx)
+    expected = vr.tracker.to_tracker(p_robot)
+    err = np.linalg.norm(export.xyz - expected, axis=1)
+    assert np.mean(err) < 0.05 and np.max(err) < 0.15  # noise and repeatability only
+    nominal = vr.tracker.to_tracker(vr.ideal_positions(table.q))
+    assert np.mean(np.linalg.norm(export.xyz - nominal, axis=1)) > 3 * np.mean(err)
+
+
+def test_pose_table_faults_are_named(campaign, tmp_path, capsys):
+    rows = lines(campaign / "plan/poses.csv")
+    cells = rows[3].split(",")
+    cells[9] = "7"  # sweep_joint of a sweep row
+    rows[3] = ",".join(cells)
+    bad = tmp_path / "poses.csv"
+    bad.write_text("\n".join(rows) + "\n")
+    assert main(["import", str(campaign / "run/tracker_export.csv"), "--poses", str(bad),
+                 "-o", str(tmp_path / "o"), "--robot", "IRB1600-10/1.45",
+                 "--smr-offset", "60,80,90"]) == 1
+    assert one_line_error(capsys) == (f"rapidfix: error: {bad}: row 4, column 'sweep_joint': "
+                                      "sweep rows need sweep_joint 1..6")

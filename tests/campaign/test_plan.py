@@ -46,7 +46,8 @@ def test_sweeps_follow_the_protocol_and_the_program_runs_them_in_table_order():
     q_fine = ex.q_cmd[np.array(fine)]
     assert np.allclose(q_fine, t.q, atol=1e-5)  # one fine stop per table row, same order
     assert plan.program.count("WaitTime nRfSettle;") == len(t)
-    tp = [line.strip() for line in plan.program.splitlines() if line.strip().startswith("TPWrite \"")]
+    tp = [line.strip() for line in plan.program.splitlines()
+          if line.strip().startswith('TPWrite "')]
     ids = [line.split('"')[1] for line in tp if not line.split('"')[1].startswith("rapidfix:")]
     assert ids == list(t.point_id)
 
@@ -98,7 +99,12 @@ def test_approach_both_sides_measures_each_point_from_above_and_below():
     plan = make_plan(ROBOT, small(approach="both", sweep_joints=(2,)))
     t = plan.table
     cal = t.set_name == "calibration"
-    assert np.array_equal(t.ints["approach"][cal], np.tile([1, -1], cal.sum() // 2))
+    ids = t.point_id[cal]
+    assert all(pid.endswith("ud"[k % 2]) for k, pid in enumerate(ids))
+    down = np.char.endswith(ids.astype(str), "d")
+    assert np.all(t.ints["approach"][cal][down] == -1)  # re-approached from above
+    assert np.all(t.ints["approach_joints"][cal][down] == 63)  # every joint turned
+    assert np.all(t.ints["approach"][cal][~down] >= 0)
     sw = t.set_name == "sweep"
     down = t.ints["repeat"][sw] == 2
     assert np.all(np.diff(np.degrees(t.q[sw][down, 1])) < 0)

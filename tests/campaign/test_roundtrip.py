@@ -90,7 +90,7 @@ def test_iso_formulas_on_known_cycles():
     l = np.array([0.1, 0.1, 0.2, 0.2])  # noqa: E741
     assert np.allclose(pa["RP"], l.mean() + 3 * l.std(ddof=1))
     d = {x["pair"]: x for x in distance_accuracy(runs)}
-    assert list(d)[0] == "P2-P4"
+    assert next(iter(d)) == "P2-P4"
     # every pose moves by the same offset in a cycle: the distances are exact
     assert np.isclose(d["P2-P4"]["Dc_mm"], 200.0)
     assert np.isclose(d["P2-P4"]["AD_mm"], 0.0) and np.isclose(d["P2-P4"]["RD_mm"], 0.0)
