@@ -2,10 +2,13 @@
 ISO 9283 tables in the project's format (`rapidfix.measure.files`), rows in the
 pose table's (execution) order.
 
-When the program made approach moves, every table gets the pose table's
-`approach` and `approach_joints` columns: the rows' order alone would give the
-wrong direction of arrival for the joints such a move turned, and the sweep
-analysis reads them (backlash)."""
+When the program approached poses from both sides (`rapidfix plan --approach
+both`), every table gets the pose table's `approach` and `approach_joints`
+columns: the rows' order alone would give the wrong direction of arrival for the
+joints an approach move turned, and the sweep analysis reads them to fit each
+joint's backlash. With one side only the play cannot be seen in the data and the
+columns are left out: the analysis then runs exactly as on any sweep file (rows
+in order), like the virtual cell's direct route."""
 
 from __future__ import annotations
 
@@ -37,7 +40,7 @@ def measurement_tables(match: Matching, table: PoseTable, export: TrackerExport
     xyz = match.xyz_mm[order]
     payload_varies = bool(np.any(table.payload_kg != table.payload_kg[0])
                           or table.payload_kg[0] != 0)
-    approached = bool(np.any(table.ints["approach"] != 0))
+    approached = bool(np.any(table.ints["approach"] > 0) and np.any(table.ints["approach"] < 0))
     out: dict[str, SweepTable | PointTable] = {}
     for name in FILES:
         sel = table.set_name[rows_t] == name
