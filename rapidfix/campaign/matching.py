@@ -7,9 +7,10 @@ Three ways, chosen automatically (or by the user):
   duplicated ids and points out of execution order are errors;
 - by time — the export has timestamps: each must fall in a pose's settled window
   [t_trigger_s, t_leave_s] of the plan's schedule. The tracker's clock origin is
-  found from the first points, and the mapping is re-anchored at every point, so
-  the schedule's error accumulates only over one move; a `Stop` (payload change)
-  re-anchors at the next pose. A timestamp between two windows is a point measured
+  found from the first points, and the mapping is re-anchored at every matched
+  point, so the schedule's error (allowed: the tolerance plus 15 % of the motion
+  time) does not accumulate; after a `Stop` (payload change, any duration) the
+  next point is the next pose. A timestamp between two windows is a point measured
   while the robot was still moving; one before its window's settle time, one
   taken before the robot settled;
 - by order — neither: the export's rows are the table's rows, one for one.
@@ -34,6 +35,8 @@ from rapidfix.exceptions import MeasurementError
 from rapidfix.kinematics import RobotModel
 
 MODES = ("auto", "id", "time", "order")
+#: share of the planned motion time since the last matched point a timestamp may be off
+TIME_DRIFT = 0.15
 #: measured/planned distance ratios closer than this (relative) to a unit's are that unit
 UNIT_TOLERANCE = 0.02
 
@@ -88,42 +91,49 @@ def _by_id(export: TrackerExport, table: PoseTable, problems: list) -> tuple[np.
 
 def _by_time(export: TrackerExport, table: PoseTable, tol: float, problems: list
              ) -> tuple[np.ndarray, np.ndarray]:
+    """Sequential matching on the plan's schedule, re-anchored at every matched point.
+
+    From the last matched point (the anchor) the schedule of the next poses is trusted
+    to `tol` plus `TIME_DRIFT` of the motion time since the anchor; a pose after a
+    `Stop` takes any time after its predecessor was left (the pause has no duration).
+    """
     t = export.time_s
     arrive, trig, leave = (table.times[c] for c in ("t_arrive_s", "t_trigger_s", "t_leave_s"))
+    pause = table.ints["pause_before"].astype(bool)
     n = len(table)
-    end = leave + tol
-    head = t[:30]
-    best, offset = -1, float(t[0] - trig[0])
-    for i in range(min(3, len(t))):
-        for j in range(min(3, n)):
-            off = t[i] - trig[j]
-            k = np.searchsorted(end, head - off)
-            inside = (k < n) & (head - off >= arrive[np.minimum(k, n - 1)] - tol)
-            if inside.sum() > best:
-                best, offset = int(inside.sum()), float(off)
+    offset = _first_offset(t, arrive, trig, leave, tol)
+    anchor = float(trig[0]) - float(arrive[0])  # plan time of the anchor
     t_rows, e_rows = [], []
     j_next = 0
     for i in range(len(t)):
         tau = t[i] - offset
-        if j_next < n and table.ints["pause_before"][j_next] and j_next > 0 \
-                and tau > arrive[j_next] + tol:
-            offset, tau = t[i] - trig[j_next], trig[j_next]
-        k = int(np.searchsorted(end, tau))
+        k = j_next
+        while k < n:
+            if pause[k] and k > 0:
+                if tau > leave[k - 1] + tol:  # after a Stop: the first point is this pose
+                    offset += tau - trig[k]
+                    tau = trig[k]
+                break
+            slack = tol + TIME_DRIFT * max(0.0, arrive[k] - anchor)
+            if tau <= leave[k] + slack:
+                break
+            k += 1
         if k >= n:
             problems.append(_problem(export, i, "time", f"measured {tau - leave[-1]:.1f} s "
                                      "after the robot left the last pose: an extra point"))
             continue
-        if tau < arrive[k] - tol:
+        slack = tol + TIME_DRIFT * max(0.0, arrive[k] - anchor)
+        if tau < arrive[k] - slack:
+            if k == j_next and k > 0 and tau <= leave[k - 1]:
+                problems.append(_problem(export, i, "time", "a second measurement of "
+                                         f"{table.point_id[k - 1]}"))
+            else:
+                problems.append(_problem(export, i, "time", "measured while the robot was "
+                                         f"still moving ({arrive[k] - tau:.2f} s before it "
+                                         f"reached {table.point_id[k]})"))
+            continue
+        if tau < trig[k] - slack:
             problems.append(_problem(export, i, "time", "measured while the robot was still "
-                                     f"moving ({arrive[k] - tau:.2f} s before it reached "
-                                     f"{table.point_id[k]})"))
-            continue
-        if k < j_next:
-            problems.append(_problem(export, i, "time", f"a second measurement of "
-                                     f"{table.point_id[k]}"))
-            continue
-        if tau < trig[k] - tol:
-            problems.append(_problem(export, i, "time", f"measured while the robot was still "
                                      f"settling at {table.point_id[k]} ({trig[k] - tau:.2f} s "
                                      "before its settle time ended)"))
             j_next = k + 1
@@ -131,8 +141,27 @@ def _by_time(export: TrackerExport, table: PoseTable, tol: float, problems: list
         t_rows.append(k)
         e_rows.append(i)
         j_next = k + 1
-        offset += tau - np.clip(tau, trig[k], leave[k])
+        offset = t[i] - trig[k]
+        anchor = float(trig[k])
     return np.array(t_rows, dtype=int), np.array(e_rows, dtype=int)
+
+
+def _first_offset(t: np.ndarray, arrive: np.ndarray, trig: np.ndarray, leave: np.ndarray,
+                  tol: float) -> float:
+    """The tracker clock at the plan's zero: the alignment of one of the first three
+    points with one of the first three poses that puts most of the first 30 points in a
+    pose's still window."""
+    n = len(trig)
+    head = t[:30]
+    best, offset = -1, float(t[0] - trig[0])
+    for i in range(min(3, len(t))):
+        for j in range(min(3, n)):
+            off = t[i] - trig[j]
+            k = np.searchsorted(leave + tol, head - off)
+            inside = (k < n) & (head - off >= arrive[np.minimum(k, n - 1)] - tol)
+            if inside.sum() > best:
+                best, offset = int(inside.sum()), float(off)
+    return offset
 
 
 def _moving_by_time(export: TrackerExport, table: PoseTable, t_rows: np.ndarray,

@@ -146,7 +146,7 @@ def test_point_measured_while_moving_is_named(campaign, tmp_path, capsys):
 
     def early(rows):
         cells = rows[8].split(",")
-        cells[1] = f"{float(cells[1]) - 1.0 - move_s / 2:.3f}"  # mid-way through the move
+        cells[1] = f"{float(cells[1]) - 1.0 - 0.8 * move_s:.3f}"  # early in the move
         rows[8] = ",".join(cells)
     path = edited(campaign, tmp_path, early)
     assert run_import(campaign, path, tmp_path / "o") == 1
@@ -216,3 +216,53 @@ def test_pose_table_faults_are_named(campaign, tmp_path, capsys):
                  "--smr-offset", "60,80,90"]) == 1
     assert one_line_error(capsys) == (f"rapidfix: error: {bad}: row 4, column 'sweep_joint': "
                                       "sweep rows need sweep_joint 1..6")
+
+
+def test_time_matching_survives_a_longer_stop_and_a_slower_robot(campaign, tmp_path, capsys):
+    """The operator takes 5 min instead of the planned 60 s to change the payload, and the
+    robot runs 6 % slower than the plan's estimate: re-anchoring at every point and at
+    every Stop keeps each point on its pose."""
+    run = tmp_path / "slow"
+    assert main(["simulate", str(run), "--program", str(campaign / "plan/measure.mod"),
+                 "--poses", str(campaign / "plan/poses.csv"), "--export-format", "timed",
+                 "--seed", "5", "--pause", "300", "--no-ids", "--delimiter", "tab"]) == 0
+    rows = lines(run / "tracker_export.csv")
+    t0 = float(rows[1].split("\t")[0])
+    stretched = [rows[0]] + ["\t".join([f"{t0 + 1.06 * (float(r.split(chr(9))[0]) - t0):.3f}",
+                                        *r.split("\t")[1:]]) for r in rows[1:]]
+    path = tmp_path / "slow.txt"
+    path.write_text("\n".join(stretched) + "\n")
+    assert run_import(campaign, path, tmp_path / "o") == 0
+    assert "matched by time" in capsys.readouterr().out
+    assert run_import(campaign, campaign / "run/tracker_export.csv", tmp_path / "ref") == 0
+    a = read_points(tmp_path / "o/calibration.csv")
+    b = read_points(tmp_path / "ref/calibration.csv")
+    assert list(a.point_id) == list(b.point_id)
+    assert np.allclose(a.q, b.q)
+    assert np.all(np.linalg.norm(a.xyz - b.xyz, axis=1) < 0.2)  # same poses, new noise
+
+
+def test_clock_times_and_temperature_reach_the_measurement_files(tmp_path, capsys):
+    assert main(["plan", str(tmp_path / "plan"), "--joints", "3", "--step", "10",
+                 "--repeats", "1", "--calibration-points", "6", "--validation-points", "4"]) == 0
+    assert main(["simulate", str(tmp_path / "run"), "--program",
+                 str(tmp_path / "plan/measure.mod"), "--poses", str(tmp_path / "plan/poses.csv"),
+                 "--export-format", "timed", "--effect", "thermal_drift", "--seed", "2"]) == 0
+    rows = lines(tmp_path / "run/tracker_export.csv")
+    assert rows[0].endswith("Temperature")
+
+    def clock(r: str) -> str:
+        c = r.split(",")
+        t = float(c[1])
+        c[1] = f"{int(t // 3600):02d}:{int(t % 3600 // 60):02d}:{t % 60:06.3f}"
+        return ",".join(c)
+    path = tmp_path / "clock.csv"
+    path.write_text("\n".join([rows[0]] + [clock(r) for r in rows[1:]]) + "\n")
+    capsys.readouterr()
+    assert main(["import", str(path), "--poses", str(tmp_path / "plan/poses.csv"), "-o",
+                 str(tmp_path / "set")]) == 0
+    cal = read_points(tmp_path / "set/calibration.csv")
+    sweeps = read_sweeps(tmp_path / "set/sweeps.csv")
+    export = read_export(tmp_path / "run/tracker_export.csv")
+    assert np.allclose(cal.temp_c, export.temp_c[len(sweeps):len(sweeps) + len(cal)], atol=1e-3)
+    assert np.allclose(sweeps.time_s, export.time_s[:len(sweeps)] - export.time_s[0], atol=2e-3)
