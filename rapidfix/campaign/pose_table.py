@@ -14,13 +14,20 @@ from __future__ import annotations
 
 import csv
 import io
+import sys
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import MeasurementError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 INT_COLUMNS = ("sweep_joint", "repeat", "iso_pose", "cycle", "approach", "approach_joints",
@@ -145,3 +152,14 @@ def read_pose_table(path: str | Path) -> PoseTable:
                                file=path, row=rows[int(back[0]) + 1], column="t_trigger_s")
     return PoseTable(ids.astype(str), sets.astype(str), q, numbers("payload_kg", 0.0), ints,
                      times, np.asarray(rows), path)
+
+
+def read_plan_meta(poses_path: str | Path) -> dict[str, Any]:
+    """`plan.toml` beside a pose table (robot, ball offset, timing), or {} without one."""
+    path = Path(poses_path).parent / "plan.toml"
+    if not path.exists():
+        return {}
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise MeasurementError(f"not valid TOML: {err}", file=path) from None

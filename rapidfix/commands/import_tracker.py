@@ -6,10 +6,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from rapidfix.exceptions import MeasurementError, OutputExistsError, RapidfixError
-
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `import` command."""
@@ -48,60 +44,33 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, match, check, write; every problem is printed, the first is the error."""
-    from rapidfix.campaign.matching import match_export
-    from rapidfix.campaign.measurement_set import FILES, measurement_tables, write_measurement_set
-    from rapidfix.campaign.pose_table import read_pose_table
-    from rapidfix.campaign.tracker_export import read_export
-    from rapidfix.commands.simulate_program import _plan_meta
-    from rapidfix.kinematics import load_robot
-    from rapidfix.measure.files import Setup
+    from rapidfix.campaign.importing import import_export
 
-    poses = Path(args.poses)
-    table = read_pose_table(poses)
-    meta = _plan_meta(poses)
-    robot_name = args.robot or meta.get("robot")
-    smr = meta.get("smr_offset_mm")
+    smr = None
     if args.smr_offset:
         from rapidfix.commands.plan import _numbers
 
         smr = _numbers(args.smr_offset, 3, "--smr-offset")
-    if robot_name is None or smr is None:
-        raise RapidfixError("no plan.toml beside the pose table: give --robot and --smr-offset")
-    out = Path(args.output)
-    targets = [*FILES.values(), "setup.toml"]
-    existing = [n for n in targets if (out / n).exists()]
-    if existing and not args.force:
-        raise OutputExistsError(f"the folder already holds {', '.join(existing)}", file=out,
-                                hint="choose another folder or pass --force")
     columns = [c.strip().lower() for c in args.columns.split(",")] if args.columns else None
-    export = read_export(args.export, columns=columns)
-    robot = load_robot(robot_name)
-    match = match_export(export, table, robot, np.asarray(smr, dtype=float), mode=args.match,
-                         units=args.units, time_tolerance_s=args.time_tolerance)
-    problems = list(match.problems)
-    missing = match.missing
-    if missing and not args.allow_missing:
-        shown = ", ".join(missing[:10]) + (f" and {len(missing) - 10} more"
-                                           if len(missing) > 10 else "")
-        problems.append(MeasurementError(f"{len(missing)} poses of the pose table were not "
-                                         f"measured: {shown}", file=export.path,
-                                         hint="--allow-missing writes the rest"))
-    if problems:
-        for extra in problems[1:]:
+    result = import_export(args.export, args.poses, args.output, mode=args.match,
+                           units=args.units, columns=columns,
+                           time_tolerance_s=args.time_tolerance, robot=args.robot,
+                           smr_offset_mm=smr, allow_missing=args.allow_missing,
+                           write_setup=not args.no_setup, overwrite=args.force)
+    if result.problems:
+        for extra in result.problems[1:]:
             print(f"rapidfix: error: {extra}", file=sys.stderr)
-        first = problems[0]
-        if len(problems) > 1:
-            first.hint = f"{len(problems) - 1} more problems listed above"
+        first = result.problems[0]
+        if len(result.problems) > 1:
+            first.hint = f"{len(result.problems) - 1} more problems listed above"
         raise first
-    for text in match.assumptions:
-        print(f"{export.path.name}: {text}")
-    tables = measurement_tables(match, table, export)
-    setup = None if args.no_setup else Setup(robot=robot.name,
-                                              smr_offset_mm=np.asarray(smr, dtype=float))
-    paths = write_measurement_set(out, tables, setup)
-    counts = ", ".join(f"{len(t)} {n}" for n, t in tables.items())
-    print(f"matched {len(match.table_index)} points of {len(table)} ({counts})")
-    print("wrote " + ", ".join(str(p) for p in paths))
+    name = Path(args.export).name
+    for text in result.match.assumptions:
+        print(f"{name}: {text}")
+    counts = ", ".join(f"{len(t)} {n}" for n, t in result.tables.items())
+    print(f"matched {len(result.match.table_index)} points of {result.poses} ({counts})")
+    print("wrote " + ", ".join(str(p) for p in result.paths))
+    missing = result.match.missing
     if missing:
         print(f"rapidfix: warning: {len(missing)} poses not measured: "
               + ", ".join(missing[:20]) + (" …" if len(missing) > 20 else ""), file=sys.stderr)
