@@ -190,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
           f"{s['payload_changes']} payload changes")
     print(f"estimated run time {int(t // 3600)} h {int(t % 3600 // 60):02d} min "
           f"{int(t % 60):02d} s; fastest joint at {100 * s['fastest_joint_share_of_rated']:.0f}"
-          " % of its rated speed")
+          f" % of its rated speed (cap {args.joint_speed:g} %)")
     if "iso9283" in s:
         iso = s["iso9283"]
         c = ", ".join(f"{v:.1f}" for v in iso["centre_mm"])
