@@ -16,7 +16,7 @@ import numpy as np
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.campaign.envelope import Envelope
-from rapidfix.campaign.pose_table import INT_COLUMNS, PoseTable, write_pose_table
+from rapidfix.campaign.pose_table import PoseTable, write_pose_table
 from rapidfix.campaign.poses import (
     ISO_DEFAULT_CYCLES,
     WRIST_MIN_DEG,
@@ -31,8 +31,8 @@ from rapidfix.campaign.poses import (
 from rapidfix.campaign.program import ProgramOptions, measurement_module
 from rapidfix.campaign.sight import TrackerView
 from rapidfix.campaign.timing import (
+    mean_joint_speed,
     move_durations,
-    peak_joint_speed,
     rated_joint_speed,
     schedule,
 )
@@ -181,8 +181,8 @@ def make_plan(robot: RobotModel, settings: PlanSettings) -> Plan:
     move_s = (move_durations(robot, prev, via, m, tool_mm=smr)
               + move_durations(robot, via, q, m, tool_mm=smr) + pause * st.pause_s)
     sched = schedule(move_s, m)
-    speed = np.vstack([peak_joint_speed(robot, prev, via, m, tool_mm=smr),
-                       peak_joint_speed(robot, via, q, m, tool_mm=smr)])
+    speed = np.vstack([mean_joint_speed(robot, prev, via, m, tool_mm=smr),
+                       mean_joint_speed(robot, via, q, m, tool_mm=smr)])
     share = float(np.max(speed / rated_joint_speed(robot))) if len(speed) else 0.0
 
     table = PoseTable(
@@ -288,6 +288,3 @@ def write_plan(plan: Plan, out_dir: str | Path, *, program_name: str = "measure.
                   f"side_mm = {float(plan.cube.side_mm)!r}", f"cycles = {st.iso_cycles}"]
     write_text_atomic(paths["plan"], "\n".join(lines) + "\n")
     return paths
-
-
-__all__ = ["APPROACH_MODES", "INT_COLUMNS", "Plan", "PlanSettings", "make_plan", "write_plan"]

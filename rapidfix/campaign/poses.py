@@ -16,7 +16,7 @@ execution order and every random choice takes a seed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from itertools import product
 
 import numpy as np
@@ -50,7 +50,6 @@ class Block:
     repeat: np.ndarray  # 1.., 0 outside sweeps
     iso_pose: np.ndarray  # 1..5, 0 outside the ISO cube
     cycle: np.ndarray  # 1.., 0 outside the ISO cube
-    extra: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.point_id)

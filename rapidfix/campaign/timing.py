@@ -72,7 +72,7 @@ def move_durations(robot: RobotModel, q_from: np.ndarray, q_to: np.ndarray,
     return np.where(moving, t + settings.accel_s, 0.0)
 
 
-def peak_joint_speed(robot: RobotModel, q_from: np.ndarray, q_to: np.ndarray,
+def mean_joint_speed(robot: RobotModel, q_from: np.ndarray, q_to: np.ndarray,
                      settings: MotionSettings, *, tool_mm: np.ndarray | None = None
                      ) -> np.ndarray:
     """Mean joint speeds (N, 6) rad/s during each move, as `move_durations` times it."""
