@@ -266,3 +266,16 @@ def test_clock_times_and_temperature_reach_the_measurement_files(tmp_path, capsy
     export = read_export(tmp_path / "run/tracker_export.csv")
     assert np.allclose(cal.temp_c, export.temp_c[len(sweeps):len(sweeps) + len(cal)], atol=1e-3)
     assert np.allclose(sweeps.time_s, export.time_s[:len(sweeps)] - export.time_s[0], atol=2e-3)
+
+
+def test_headerless_columns_named_on_the_command_line(campaign, tmp_path):
+    rows = lines(campaign / "run/tracker_export.csv")[1:]
+    # time first, then the id, a column to skip, X Y Z
+    swapped = [";".join([r.split(",")[1], r.split(",")[0], "x", *r.split(",")[2:]])
+               for r in rows]
+    path = tmp_path / "raw.txt"
+    path.write_text("\n".join(swapped) + "\n")
+    assert run_import(campaign, path, tmp_path / "o", "--columns", "time,id,-,x,y,z") == 0
+    assert run_import(campaign, campaign / "run/tracker_export.csv", tmp_path / "ref") == 0
+    a, b = read_sweeps(tmp_path / "o/sweeps.csv"), read_sweeps(tmp_path / "ref/sweeps.csv")
+    assert np.allclose(a.xyz, b.xyz) and np.allclose(a.time_s, b.time_s)

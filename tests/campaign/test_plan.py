@@ -155,3 +155,29 @@ def test_write_plan_round_trips_the_table(tmp_path):
     table = read_pose_table(paths["poses"])
     assert list(table.point_id) == list(plan.table.point_id)
     assert np.allclose(table.q, plan.table.q, atol=1e-8)
+
+
+def test_box_in_a_work_object_frame_and_the_cube_it_holds():
+    from rapidfix.kinematics.frames import pose
+
+    # a work object turned 30° about z, 700 mm in front of the robot
+    c, s = np.cos(np.radians(15)), np.sin(np.radians(15))
+    frame = pose([700.0, 100.0, 600.0], [c, 0.0, 0.0, s])
+    box = Box(np.array([-200.0, -250.0, 0.0]), np.array([200.0, 250.0, 400.0]))
+    env = Envelope(box=box, frame=frame)
+    plan = make_plan(ROBOT, small(sweep_joints=(), envelope=env, iso=True, iso_cycles=2))
+    t = plan.table
+    pts = np.isin(t.set_name, ("calibration", "validation"))
+    local = env.to_frame(ball_positions(ROBOT, t.q[pts], SMR))
+    assert np.all(box.contains(local))
+    assert np.ptp(local[:, 0]) > 250 and np.ptp(local[:, 1]) > 300  # they fill the box
+    cube = plan.cube
+    assert cube.side_mm <= 400.0 + 1e-9  # the box's smallest side, shrunk only if unreachable
+    assert np.allclose(cube.centre_mm, frame[:3, :3] @ [0.0, 0.0, 200.0] + frame[:3, 3])
+    corners_local = env.to_frame(cube.points_mm)
+    assert np.all(box.contains(corners_local))
+
+
+def test_simulate_needs_an_output_folder_without_a_program(capsys):
+    assert main(["simulate"]) == 1
+    assert "give OUT_DIR" in capsys.readouterr().err
