@@ -132,6 +132,10 @@ def run(args: argparse.Namespace) -> int:
               "diagnosed model": loop["files"]["model"]}
     print(format_on_robot(demo_on_robot(out / "diagnosis" / "measurements", models,
                                         out / "diagnosis" / "programs", args.seed)))
+    # the measurement campaign: the ISO 9283 cube planned, run, compensated and checked
+    from rapidfix.campaign.demo import demo_campaign, format_campaign
+
+    print(format_campaign(demo_campaign(out / "campaign", model_path, args.seed)))
     for text in warned:
         print(f"rapidfix: warning: {text}", file=sys.stderr)
     return 3 if warned else 0

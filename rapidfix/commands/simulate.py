@@ -20,7 +20,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "sweeps.csv, calibration.csv, validation.csv, ballbar.toml, ballbar.csv and, "
         "separately, truth.json.",
     )
-    parser.add_argument("out_dir", metavar="OUT_DIR", help="folder to write the set to")
+    parser.add_argument("out_dir", metavar="OUT_DIR", nargs="?",
+                        help="folder to write the set to (with --program: the export and "
+                        "truth.json; default the pose table's folder)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--effect", action="append", default=[], choices=EFFECTS,
                         metavar="NAME", help="add a hidden effect; repeatable. One of: "
@@ -36,11 +38,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--payload", type=float, default=0.0, metavar="KG",
                         help="payload of the sweeps and the ballbar run")
     parser.add_argument("--force", action="store_true", help="overwrite an existing set")
+    from rapidfix.commands.simulate_program import add_program_arguments
+
+    add_program_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Simulate and write one set; say where and what the noise floor is."""
+    if args.program or args.poses:
+        from rapidfix.commands.simulate_program import run_program_command
+
+        return run_program_command(args)
+    if args.out_dir is None:
+        raise RapidfixError("give OUT_DIR, the folder to write the set to")
     for name, value in (("--calibration-points", args.calibration_points),
                         ("--validation-points", args.validation_points),
                         ("--repeats", args.repeats)):

@@ -199,10 +199,19 @@ class _Problem:
         return delta[self.uid[rows]] + d_play * play + d_start * start, d_play, d_start
 
 
-def _directions(q: np.ndarray) -> np.ndarray:
-    """Sign (N, 6) of each joint's last motion over the rows in order; 0 before its first."""
+def _directions(q: np.ndarray, approach: np.ndarray | None = None,
+                approach_joints: np.ndarray | None = None) -> np.ndarray:
+    """Sign (N, 6) of each joint's last motion over the rows in order; 0 before its first.
+
+    `approach` (N,) ±1 where a move not in the table (a measurement program's approach
+    move, `rapidfix plan`) came just before the row and turned the joints of the bit
+    mask `approach_joints` (bit j for joint j + 1): those arrive moving that way.
+    """
     step = np.diff(np.round(np.degrees(q), 5), axis=0, prepend=np.round(np.degrees(q[:1]), 5))
     sign = np.sign(step)
+    if approach is not None and approach_joints is not None:
+        turned = (approach_joints.astype(int)[:, None] >> np.arange(6)) & 1 == 1
+        sign = np.where(turned & (approach[:, None] != 0), np.sign(approach)[:, None], sign)
     rows = np.arange(len(q))[:, None]
     moved_at = np.maximum.accumulate(np.where(sign != 0, rows, -1), axis=0)
     filled = np.take_along_axis(sign, np.maximum(moved_at, 0), axis=0)
@@ -235,7 +244,8 @@ def _index(sweeps: SweepTable) -> _Problem:
     # A joint's play is seen only where one commanded value is reached from both sides,
     # the start offset only where a value is reached before and after the first motion;
     # elsewhere they would merely alias the Δθ unknowns, and stay 0.
-    direction = _directions(sweeps.q)
+    direction = _directions(sweeps.q, sweeps.extra.get("approach"),
+                            sweeps.extra.get("approach_joints"))
     seen = np.zeros((3, start), dtype=bool)  # per unknown: reached with d = -1, 0, +1
     for k in range(6):
         seen[direction[:, k].astype(int) + 1, uid[:, k]] = True
