@@ -33,6 +33,7 @@ from rapidfix.measure.files import (
     read_points,
     read_setup,
     read_sweeps,
+    robot_reach_mm,
 )
 from rapidfix.report.accuracy import BallbarRun, BeforeAfter, accuracy_report
 from rapidfix.report.document import Report, Table
@@ -52,18 +53,21 @@ def model_warnings() -> Iterator[list[str]]:
     status 3 instead of letting Python print its own warning format.
     """
     messages: list[str] = []
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", OutsideRangeWarning)
-        try:
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", OutsideRangeWarning)
             yield messages
-        finally:
-            for w in caught:
-                if issubclass(w.category, OutsideRangeWarning):
-                    text = str(w.message)
-                    if text not in messages:
-                        messages.append(text)
-                else:
-                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    finally:
+        # Outside the recording context: a warning passed on here must not be recorded
+        # into the list being read (that loop never ended and ate all memory).
+        for w in caught:
+            if issubclass(w.category, OutsideRangeWarning):
+                text = str(w.message)
+                if text not in messages:
+                    messages.append(text)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 @dataclass
@@ -115,7 +119,7 @@ def fit_from_files(
 
     setup = read_setup(setup_path)
     robot_model = robot_for(setup, robot)
-    tables = [read_sweeps(p) for p in sweep_paths]
+    tables = [read_sweeps(p, reach_mm=robot_reach_mm(robot_model)) for p in sweep_paths]
     analysis = analyse_sweeps(setup, merge_sweeps(tables), robot_model)
     data_files = [{"name": Path(setup_path).name, "sha256": file_sha256(setup_path),
                    "role": "setup"}]
@@ -270,7 +274,7 @@ def predicted_before_after(outcome: FitOutcome, points_csv: str | Path) -> Befor
     model prediction), i.e. the error compensation is predicted to leave. Nothing
     is executed; rows run in file order under the file's conditions.
     """
-    table = read_points(points_csv)
+    table = read_points(points_csv, reach_mm=robot_reach_mm(outcome.robot))
     setup, robot = outcome.setup, outcome.robot
     measured = to_robot_frame(outcome.analysis.registration, table.xyz)
     nominal = ideal_ball(robot, table.q, setup.smr_offset_mm)
