@@ -148,6 +148,11 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
+def _number(value: float | None, width: int, decimals: int) -> str:
+    """A right-aligned number, or 'n/a' (e.g. the repeatability of single measurements)."""
+    return f"{'n/a':>{width}}" if value is None else f"{value:>{width}.{decimals}f}"
+
+
 def fit_summary(model: ErrorModel) -> str:
     """The per-joint table `rapidfix fit` prints (degrees)."""
     lines = [f"{'joint':<6}{'range (°)':>20}{'points':>8}{'max |Δθ| (°)':>14}"
@@ -158,8 +163,9 @@ def fit_summary(model: ErrorModel) -> str:
             continue
         lo, hi = s["range_deg"]
         lines.append(f"J{s['joint']:<5}{f'{lo:.1f} … {hi:.1f}':>20}{s['points']:>8}"
-                     f"{s['max_abs_error_deg']:>14.4f}{s['cv_rms_deg']:>12.5f}"
-                     f"{s['repeatability_deg']:>13.5f}")
+                     f"{_number(s.get('max_abs_error_deg'), 14, 4)}"
+                     f"{_number(s.get('cv_rms_deg'), 12, 5)}"
+                     f"{_number(s.get('repeatability_deg'), 13, 5)}")
     for s in model.statistics.get("joints", []):
         for lo, hi in s.get("gaps_deg", []):
             lines.append(f"warning: joint {s['joint']} has no measurements between {lo:.1f}° "

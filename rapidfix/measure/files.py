@@ -21,6 +21,7 @@ import io
 import math
 import re
 import sys
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.exceptions import KinematicsError, MeasurementError
+from rapidfix.exceptions import KinematicsError, MeasurementError, RapidfixWarning
 from rapidfix.kinematics import load_robot
 
 if sys.version_info >= (3, 11):
@@ -122,6 +123,14 @@ class PointTable:
 # --------------------------------------------------------------------------- setup
 
 
+#: the keys setup.toml may hold; any other is reported and ignored
+SETUP_KEYS = ("robot", "smr_offset_mm", "tracker_sigma_mm", "payload_kg")
+
+
+class MeasurementWarning(RapidfixWarning):
+    """Something in a measurement file that is ignored (e.g. an unknown setup key)."""
+
+
 def _toml_line(text: str, key: str) -> int | None:
     """The line on which `key = ...` is written, for error messages."""
     match = re.search(rf"^\s*{re.escape(key)}\s*=", text, flags=re.MULTILINE)
@@ -180,8 +189,11 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         raise fail("tracker_sigma_mm", f"'tracker_sigma_mm' = {sigma} mm is implausible "
                    "for a laser tracker (give mm, e.g. 0.005)")
     payload = _positive_number(data, "payload_kg", fail, optional=True, allow_zero=True)
-    known = {"robot", "smr_offset_mm", "tracker_sigma_mm", "payload_kg"}
-    extra = {k: v for k, v in data.items() if k not in known}
+    extra = {k: v for k, v in data.items() if k not in SETUP_KEYS}
+    for key in extra:
+        where = _toml_line(text, key)
+        warnings.warn(f"{path}{f':{where}' if where else ''}: unknown key {key!r} ignored "
+                      f"(known: {', '.join(SETUP_KEYS)})", MeasurementWarning, stacklevel=2)
     return Setup(robot=robot, smr_offset_mm=smr_arr, tracker_sigma_mm=sigma,
                  payload_kg=0.0 if payload is None else payload, path=path, extra=extra)
 

@@ -840,11 +840,12 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         summary=summary,
         conditions=conditions,
     )
-    if old is not None:
-        _strip_old_header(job.editor, program.text)
-    job.editor.insert(program.modules[0].header_end, header.render(
-        _module_indent(program), "\n"))
-    job.units.comments.extend(header.lines())
+    if compensated:  # the header says "compensated": never on a file where nothing is
+        if old is not None:
+            _strip_old_header(job.editor, program.text)
+        job.editor.insert(program.modules[0].header_end, header.render(
+            _module_indent(program), "\n"))
+        job.units.comments.extend(header.lines())
     output = job.editor.render()
     read = read_back(job.units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
