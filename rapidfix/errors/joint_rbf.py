@@ -331,6 +331,10 @@ class JointRBF(Effect):
                 net.weights = p[start : start + net.n_params].copy()
                 start += net.n_params
 
+    def reset_warnings(self) -> None:
+        """Warn again (once per joint) from now on, e.g. for the next file of a batch."""
+        self._warned.clear()
+
     @property
     def valid_range(self) -> np.ndarray:
         """(6, 2) rad; NaN rows for joints without a network."""
