@@ -13,6 +13,7 @@ An interrupted run leaves either the old file or the new one, never half of one:
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import sys
@@ -78,6 +79,8 @@ def remove_stale_temporaries(target: str | Path, *, now: float | None = None) ->
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
     """Write `data` to `path` atomically, creating parent folders; return the path."""
     target = Path(path)
+    if target.is_dir():  # name the target, not the temporary file os.replace would name
+        raise IsADirectoryError(errno.EISDIR, "is a folder, a file name is needed", str(target))
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(target)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}-", suffix=".tmp",

@@ -49,7 +49,8 @@ def check_output_file(path: str | Path, *, inputs: Iterable[str | Path] = (),
         for other in inputs:
             q = Path(other)
             if q.exists() and q.resolve() == p.resolve():
-                raise OutputExistsError(f"the {what} would overwrite an input", file=p)
+                raise OutputExistsError(f"the {what} would overwrite the input", file=p,
+                                        hint="choose another name")
         if not overwrite:
             raise OutputExistsError(f"the {what} already exists", file=p,
                                     hint="choose another name or pass --force")
