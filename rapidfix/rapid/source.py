@@ -1,7 +1,8 @@
 """Decoding RAPID source files so that they can be written back byte for byte.
 
 Real programs are UTF-8 (with or without a byte-order mark), UTF-16 with a BOM
-(rare; without one it is recognised by its zero bytes and written back without), or a legacy single-byte code page (CP1252 comments are common). The
+(rare; without one it is recognised by its zero bytes and written back without),
+or a legacy single-byte code page (CP1252 comments are common). The
 decoded text keeps every line ending as it was; offsets into it are what the
 parser and the span edits use.
 """
