@@ -103,54 +103,49 @@ def _raise_terminated(signum: int, frame: Any) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status (also used by the console script)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
     previous = None
     try:
         previous = signal.signal(signal.SIGTERM, _raise_terminated)
     except ValueError:  # not the main thread (e.g. called from a test's thread)
         previous = None
     try:
+        args = build_parser().parse_args(argv)
         with user_warnings(args.debug) as printed:
             status = int(args.func(args) or 0)
         return EXIT_WARNINGS if status == EXIT_OK and printed else status
-    except UsageError as err:
-        if args.debug:
-            raise
-        print(f"rapidfix: error: {err}", file=sys.stderr)
-        return EXIT_USAGE
-    except RapidfixError as err:
-        if args.debug:
-            raise
-        print(f"rapidfix: error: {err}", file=sys.stderr)
-        return EXIT_FAILURE
     except KeyboardInterrupt:
         print("rapidfix: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Terminated:
         print("rapidfix: terminated", file=sys.stderr)
         return EXIT_TERMINATED
-    except OSError as err:
-        if args.debug:
+    except Exception as err:
+        if debug:
             raise
-        where = f"{err.filename}: " if getattr(err, "filename", None) else ""
-        print(f"rapidfix: error: {where}{err.strerror or err}", file=sys.stderr)
-        return EXIT_FAILURE
-    except MemoryError:
-        if args.debug:
-            raise
-        print("rapidfix: error: out of memory", file=sys.stderr)
-        return EXIT_FAILURE
-    except Exception as err:  # a bug: one line, the traceback with --debug
-        if args.debug:
-            raise
-        print(f"rapidfix: internal error: {type(err).__name__}: {err} "
-              "(run with --debug for the traceback, and please report it)", file=sys.stderr)
-        return EXIT_FAILURE
+        status, line = _error_line(err)
+        print(line, file=sys.stderr)
+        return status
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
 
+
+def _error_line(err: Exception) -> tuple[int, str]:
+    """The exit status and the one line an error is reported with."""
+    if isinstance(err, UsageError):
+        return EXIT_USAGE, f"rapidfix: error: {err}"
+    if isinstance(err, RapidfixError):
+        return EXIT_FAILURE, f"rapidfix: error: {err}"
+    if isinstance(err, OSError):
+        where = f"{err.filename}: " if getattr(err, "filename", None) else ""
+        return EXIT_FAILURE, f"rapidfix: error: {where}{err.strerror or err}"
+    if isinstance(err, MemoryError):
+        return EXIT_FAILURE, "rapidfix: error: out of memory"
+    # a bug: one line, the traceback with --debug
+    return EXIT_FAILURE, (f"rapidfix: internal error: {type(err).__name__}: {err} "
+                          "(run with --debug for the traceback, and please report it)")
 
 if __name__ == "__main__":
     sys.exit(main())
