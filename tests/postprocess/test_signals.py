@@ -142,3 +142,31 @@ def test_sigkill_in_the_middle_of_a_write_is_cleaned_by_the_next_run(cell, sampl
     assert done.returncode == 0, done.stderr
     assert _temporaries(tmp_path) == [] and out.exists()
     assert f"removed {left[0]}" in done.stderr
+
+
+TERMINATED_IN_WRITE = """
+import signal, sys, time
+from rapidfix import atomic, cli
+def slow_fsync(fd):
+    print("writing", flush=True)
+    time.sleep(60)
+atomic.os.fsync = slow_fsync
+handler = cli._raise_terminated if sys.argv[2] == "main" else atomic.exit_on_sigterm
+signal.signal(signal.SIGTERM, handler)
+try:
+    atomic.write_bytes_atomic(sys.argv[1], b"half" * 1000)
+except cli.Terminated:
+    sys.exit(143)
+"""
+
+
+@pytest.mark.parametrize("process", ["main", "worker"])
+def test_sigterm_in_the_middle_of_a_write_removes_the_temporary_file(tmp_path, process):
+    out = tmp_path / "out.mod"
+    proc = subprocess.Popen([sys.executable, "-c", TERMINATED_IN_WRITE, str(out), process],
+                            stdout=subprocess.PIPE, text=True, env=_env())
+    assert proc.stdout.readline().strip() == "writing"
+    assert len(_temporaries(tmp_path)) == 1
+    proc.terminate()
+    assert proc.wait(timeout=60) == 143
+    assert _temporaries(tmp_path) == [] and not out.exists()
