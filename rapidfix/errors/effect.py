@@ -267,7 +267,7 @@ def effect_from_dict(data: dict[str, Any], where: str = "effect") -> Effect:
         effect.free = bool(data.get("free", True))
     except ModelError:
         raise
-    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as err:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as err:
         raise ModelError(f"{where}: malformed effect data ({err})") from None
     return effect
 
@@ -282,10 +282,14 @@ def _parameter(value: Any, where: str, name: str) -> float:
     """One parameter value: a finite number within its physical bound."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ModelError(f"{where}: {name!r} is not a number ({value!r})", column=name)
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:
+        x = float("inf")
     bound = MAX_ABS_RAD if name.endswith("_rad") else MAX_ABS_OTHER
     if not np.isfinite(x):
-        raise ModelError(f"{where}: {name!r} is not finite ({value!r})", column=name)
+        raise ModelError(f"{where}: {name!r} is not a finite number of its unit",
+                         column=name)
     if abs(x) > bound:
         raise ModelError(f"{where}: {name!r} = {x:g} is beyond the physical bound "
                          f"±{bound:g}", column=name)

@@ -57,6 +57,8 @@ MAX_ABS_ANGLE_DEG = 3600.0
 REACH_FACTOR = 10.0
 #: reach assumed when the robot is not known yet (larger than any ABB arm's)
 DEFAULT_REACH_MM = 5000.0
+#: the farthest a target ball may sit from the flange (mm)
+MAX_SMR_OFFSET_MM = 5000.0
 #: physical ranges of the condition columns (kg, s, °C)
 CONDITION_BOUNDS = {"payload_kg": (0.0, 1e4), "time_s": (-1e9, 1e9), "temp_c": (-273.15, 1e3)}
 
@@ -176,10 +178,16 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in smr)
     ):
         raise fail("smr_offset_mm", "'smr_offset_mm' must be three numbers [x, y, z] in mm")
-    smr_arr = np.asarray(smr, dtype=float)
+    try:
+        smr_arr = np.asarray(smr, dtype=float)
+    except OverflowError:
+        raise fail("smr_offset_mm", "'smr_offset_mm' must be finite") from None
     if not np.all(np.isfinite(smr_arr)):
         raise fail("smr_offset_mm", "'smr_offset_mm' must be finite")
     norm = float(np.linalg.norm(smr_arr))
+    if norm > MAX_SMR_OFFSET_MM:
+        raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} mm long: no target ball "
+                   f"sits more than {MAX_SMR_OFFSET_MM:g} mm from the flange")
     if 0.0 < norm < 1.0:
         raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} long: "
                    "this looks like metres, the file needs mm")
@@ -189,6 +197,8 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         raise fail("tracker_sigma_mm", f"'tracker_sigma_mm' = {sigma} mm is implausible "
                    "for a laser tracker (give mm, e.g. 0.005)")
     payload = _positive_number(data, "payload_kg", fail, optional=True, allow_zero=True)
+    if payload is not None and payload > CONDITION_BOUNDS["payload_kg"][1]:
+        raise fail("payload_kg", f"'payload_kg' = {payload:g} kg is beyond any robot's payload")
     extra = {k: v for k, v in data.items() if k not in SETUP_KEYS}
     for key in extra:
         where = _toml_line(text, key)
@@ -203,7 +213,8 @@ def _positive_number(data: Mapping[str, Any], key: str, fail: Any, *, optional: 
     value = data.get(key)
     if value is None and optional:
         return None
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)
+            or not math.isfinite(float(value) if abs(value) < 1e300 else math.inf)):
         raise fail(key, f"'{key}' must be a finite number")
     if value < 0 or (value == 0 and not allow_zero):
         raise fail(key, f"'{key}' must be {'non-negative' if allow_zero else 'positive'}")
