@@ -2,22 +2,32 @@
 
 Exit status: 0 success, 1 failure (a user error, printed as one line per
 problem), 2 wrong usage, 3 finished with warnings (something was skipped).
+
+Every Python warning raised while a command runs is printed once, as
+`rapidfix: warning: …`, and turns a successful exit status into 3. SIGTERM
+unwinds like Ctrl-C (temporary files are removed on the way out) and exits 143.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
 
 from rapidfix import __version__
-from rapidfix.exceptions import RapidfixError
+from rapidfix.exceptions import RapidfixError, UsageError
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USAGE = 2
 EXIT_WARNINGS = 3
+EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
 
 # Subcommand modules under rapidfix.commands, in the order `--help` lists them.
 COMMANDS: tuple[str, ...] = (
@@ -35,12 +45,20 @@ COMMANDS: tuple[str, ...] = (
     "upload",
 )
 
+EXIT_STATUS_EPILOG = ("exit status: 0 success, 1 failure, 2 wrong usage, "
+                      "3 finished with warnings (printed as 'rapidfix: warning: …')")
+
+
+class Terminated(BaseException):
+    """Raised in the main thread on SIGTERM, so the command unwinds like on Ctrl-C."""
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every registered subcommand."""
     parser = argparse.ArgumentParser(
         prog="rapidfix",
         description="Accurate ABB robots without touching the controller.",
+        epilog=EXIT_STATUS_EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"rapidfix {__version__}")
     parser.add_argument(
@@ -54,27 +72,83 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextmanager
+def user_warnings(debug: bool = False) -> Iterator[list[str]]:
+    """Print every user warning once as `rapidfix: warning: …`; yields the messages printed.
+
+    User warnings are UserWarning subclasses (a joint clamped to the model's range,
+    an ignored setup key, …). Others — numpy's floating-point RuntimeWarnings, a
+    library's DeprecationWarning — are internal and shown only with `--debug`.
+    """
+    printed: list[str] = []
+    original = warnings.showwarning
+
+    def show(message: Any, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: str | None = None) -> None:
+        if not issubclass(category, UserWarning):
+            if debug:
+                original(message, category, filename, lineno, file, line)
+            return
+        text = str(message)
+        if text not in printed:
+            printed.append(text)
+            print(f"rapidfix: warning: {text}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UserWarning)
+        warnings.showwarning = show
+        yield printed
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise Terminated()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status (also used by the console script)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    previous = None
     try:
-        return int(args.func(args) or 0)
-    except RapidfixError as err:
-        if args.debug:
-            raise
-        print(f"rapidfix: error: {err}", file=sys.stderr)
-        return EXIT_FAILURE
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread (e.g. called from a test's thread)
+        previous = None
+    try:
+        args = build_parser().parse_args(argv)
+        with user_warnings(args.debug) as printed:
+            status = int(args.func(args) or 0)
+        return EXIT_WARNINGS if status == EXIT_OK and printed else status
     except KeyboardInterrupt:
         print("rapidfix: interrupted", file=sys.stderr)
-        return 130
-    except OSError as err:
-        if args.debug:
+        return EXIT_INTERRUPTED
+    except Terminated:
+        print("rapidfix: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
+    except Exception as err:
+        if debug:
             raise
-        where = f"{err.filename}: " if getattr(err, "filename", None) else ""
-        print(f"rapidfix: error: {where}{err.strerror or err}", file=sys.stderr)
-        return EXIT_FAILURE
+        status, line = _error_line(err)
+        print(line, file=sys.stderr)
+        return status
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
+
+def _error_line(err: Exception) -> tuple[int, str]:
+    """The exit status and the one line an error is reported with."""
+    if isinstance(err, UsageError):
+        return EXIT_USAGE, f"rapidfix: error: {err}"
+    if isinstance(err, RapidfixError):
+        return EXIT_FAILURE, f"rapidfix: error: {err}"
+    if isinstance(err, OSError):
+        where = f"{err.filename}: " if getattr(err, "filename", None) else ""
+        return EXIT_FAILURE, f"rapidfix: error: {where}{err.strerror or err}"
+    if isinstance(err, MemoryError):
+        return EXIT_FAILURE, "rapidfix: error: out of memory"
+    # a bug: one line, the traceback with --debug
+    return EXIT_FAILURE, (f"rapidfix: internal error: {type(err).__name__}: {err} "
+                          "(run with --debug for the traceback, and please report it)")
 
 if __name__ == "__main__":
     sys.exit(main())

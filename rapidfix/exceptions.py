@@ -75,3 +75,12 @@ class LinkError(RapidfixError):
 
 class OutputExistsError(RapidfixError):
     """An output that would overwrite an input or an existing file without permission."""
+
+
+class UsageError(RapidfixError):
+    """Options that do not go together, or a missing one: wrong use of the command line
+    (exit status 2)."""
+
+
+class RapidfixWarning(UserWarning):
+    """A warning for the user: the CLI prints it as `rapidfix: warning: …` (exit status 3)."""

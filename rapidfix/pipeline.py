@@ -33,6 +33,7 @@ from rapidfix.measure.files import (
     read_points,
     read_setup,
     read_sweeps,
+    robot_reach_mm,
 )
 from rapidfix.report.accuracy import BallbarRun, BeforeAfter, accuracy_report
 from rapidfix.report.document import Report, Table
@@ -52,18 +53,21 @@ def model_warnings() -> Iterator[list[str]]:
     status 3 instead of letting Python print its own warning format.
     """
     messages: list[str] = []
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", OutsideRangeWarning)
-        try:
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", OutsideRangeWarning)
             yield messages
-        finally:
-            for w in caught:
-                if issubclass(w.category, OutsideRangeWarning):
-                    text = str(w.message)
-                    if text not in messages:
-                        messages.append(text)
-                else:
-                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    finally:
+        # Outside the recording context: a warning passed on here must not be recorded
+        # into the list being read (that loop never ended and ate all memory).
+        for w in caught:
+            if issubclass(w.category, OutsideRangeWarning):
+                text = str(w.message)
+                if text not in messages:
+                    messages.append(text)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 @dataclass
@@ -115,7 +119,7 @@ def fit_from_files(
 
     setup = read_setup(setup_path)
     robot_model = robot_for(setup, robot)
-    tables = [read_sweeps(p) for p in sweep_paths]
+    tables = [read_sweeps(p, reach_mm=robot_reach_mm(robot_model)) for p in sweep_paths]
     analysis = analyse_sweeps(setup, merge_sweeps(tables), robot_model)
     data_files = [{"name": Path(setup_path).name, "sha256": file_sha256(setup_path),
                    "role": "setup"}]
@@ -144,6 +148,11 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
+def _number(value: float | None, width: int, decimals: int) -> str:
+    """A right-aligned number, or 'n/a' (e.g. the repeatability of single measurements)."""
+    return f"{'n/a':>{width}}" if value is None else f"{value:>{width}.{decimals}f}"
+
+
 def fit_summary(model: ErrorModel) -> str:
     """The per-joint table `rapidfix fit` prints (degrees)."""
     lines = [f"{'joint':<6}{'range (°)':>20}{'points':>8}{'max |Δθ| (°)':>14}"
@@ -154,8 +163,9 @@ def fit_summary(model: ErrorModel) -> str:
             continue
         lo, hi = s["range_deg"]
         lines.append(f"J{s['joint']:<5}{f'{lo:.1f} … {hi:.1f}':>20}{s['points']:>8}"
-                     f"{s['max_abs_error_deg']:>14.4f}{s['cv_rms_deg']:>12.5f}"
-                     f"{s['repeatability_deg']:>13.5f}")
+                     f"{_number(s.get('max_abs_error_deg'), 14, 4)}"
+                     f"{_number(s.get('cv_rms_deg'), 12, 5)}"
+                     f"{_number(s.get('repeatability_deg'), 13, 5)}")
     for s in model.statistics.get("joints", []):
         for lo, hi in s.get("gaps_deg", []):
             lines.append(f"warning: joint {s['joint']} has no measurements between {lo:.1f}° "
@@ -270,7 +280,7 @@ def predicted_before_after(outcome: FitOutcome, points_csv: str | Path) -> Befor
     model prediction), i.e. the error compensation is predicted to leave. Nothing
     is executed; rows run in file order under the file's conditions.
     """
-    table = read_points(points_csv)
+    table = read_points(points_csv, reach_mm=robot_reach_mm(outcome.robot))
     setup, robot = outcome.setup, outcome.robot
     measured = to_robot_frame(outcome.analysis.registration, table.xyz)
     nominal = ideal_ball(robot, table.q, setup.smr_offset_mm)

@@ -7,6 +7,8 @@ import os
 from pathlib import Path
 
 from rapidfix.commands.rewrite import add_common_options, options_from_args
+from rapidfix.exceptions import UsageError
+from rapidfix.paths import check_output_dir, check_output_file
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -34,6 +36,14 @@ def run(args: argparse.Namespace) -> int:
     """Run the batch, print the table, write the JSON summary."""
     from rapidfix.postprocess.batch import BatchSettings, run_batch, write_summary
 
+    if args.out_dir is None and not args.in_place:
+        raise UsageError("an output folder OUT_DIR is needed unless --in-place is given")
+    if args.out_dir is not None and args.in_place:
+        raise UsageError("give either OUT_DIR or --in-place, not both")
+    if args.out_dir is not None:
+        check_output_dir(args.out_dir)
+    if args.summary:
+        check_output_file(args.summary, what="summary file")
     settings = BatchSettings(
         model_path=str(args.model),
         robot=args.robot,

@@ -63,7 +63,8 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     claim_output(out)
     cell = out / "measurements"
-    steps = tqdm(total=6, desc="rapidfix demo", unit="step", leave=False)
+    steps = tqdm(total=6, desc="rapidfix demo", unit="step", leave=False,
+                 disable=not sys.stderr.isatty())
 
     steps.set_postfix_str("simulating the cell")
     simulate_cell(cell, seed=args.seed, overwrite=True)

@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
+import warnings
 from pathlib import Path
 
-from rapidfix.exceptions import OutputExistsError
+from rapidfix.exceptions import OutputExistsError, RapidfixWarning
+from rapidfix.paths import check_input_file, check_output_dir, check_output_file
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -47,6 +50,10 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     outputs = [out / "model.json", out / "diagnosis.html", out / "diagnosis.json"]
     inputs = [Path(p) for p in (args.model, args.setup, args.calibration, args.validation)]
+    for path, what in zip(inputs, ("model file", "setup file", "calibration file",
+                                   "validation file")):
+        check_input_file(path, what)
+    check_output_dir(out)
     for target in outputs:
         if any(p.exists() and target.exists() and target.resolve() == p.resolve()
                for p in inputs):
@@ -54,12 +61,18 @@ def run(args: argparse.Namespace) -> int:
         if target.exists() and not args.force:
             raise OutputExistsError("already exists", file=target,
                                     hint="choose another --out or pass --force")
+        check_output_file(target, inputs=inputs)
+    if inputs[2].resolve() == inputs[3].resolve():
+        warnings.warn(f"{args.calibration} is both the calibration and the validation file: "
+                      "the validation numbers are not independent of the fit", RapidfixWarning,
+                      stacklevel=2)
     candidates = CANDIDATES
     if args.candidates:
         candidates = tuple(c.strip() for c in args.candidates.split(",") if c.strip())
     from tqdm import tqdm
 
-    with tqdm(desc="rapidfix diagnose", unit="fit", leave=False) as bar:
+    with tqdm(desc="rapidfix diagnose", unit="fit", leave=False,
+              disable=not sys.stderr.isatty()) as bar:
 
         def progress(message: str) -> None:
             bar.set_postfix_str(message)

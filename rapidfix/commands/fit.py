@@ -6,7 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from rapidfix.exceptions import OutputExistsError
+from rapidfix.cli import EXIT_STATUS_EPILOG
+from rapidfix.paths import check_input_file, check_output_dir, check_output_file
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -17,7 +18,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Register the tracker, recover every joint's actual angle from the "
         "sweeps, fit one cross-validated Gaussian RBF network per joint and write the "
         "model file (JSON). Prints per joint the valid range, the cross-validated RMS "
-        "and the repeatability.",
+        "and the repeatability. Exit status 3 when the model warned (e.g. a validation "
+        "angle outside the fitted range, clamped), printed as 'rapidfix: warning: …'.",
+        epilog=EXIT_STATUS_EPILOG,
     )
     parser.add_argument("setup", metavar="SETUP", help="setup.toml of the measurement set")
     parser.add_argument("sweeps", metavar="SWEEPS", nargs="+", help="sweeps CSV file(s)")
@@ -49,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace) -> None:
-    """The work of `run`."""
+    """The work of `run`: every path checked first, the model written last, nothing
+    written when any step fails."""
     from rapidfix import pipeline
     from rapidfix.errors.model_file import save_model
     from rapidfix.report.accuracy import validation_section
@@ -57,33 +61,45 @@ def _fit(args: argparse.Namespace) -> None:
 
     output = Path(args.output)
     inputs = [Path(args.setup), *map(Path, args.sweeps)]
-    if any(output.exists() and output.resolve() == p.resolve() for p in inputs if p.exists()):
-        raise OutputExistsError("the model file would overwrite an input", file=output)
+    for path in inputs:
+        check_input_file(path, "measurement file")
+    if args.validation:
+        check_input_file(args.validation, "validation file")
+        inputs.append(Path(args.validation))
+    check_output_file(output, inputs=inputs, what="model file")
+    if args.report:
+        check_output_dir(args.report, "report folder")
+        for name in ("report.html", "report.json"):
+            check_output_file(Path(args.report) / name, inputs=inputs, what="report")
     outcome = pipeline.fit_from_files(args.setup, args.sweeps, robot=args.robot,
-                             policy=args.outside_range)
-    save_model(outcome.model, output)
-    print(outcome.model.summary())
-    print(pipeline.fit_summary(outcome.model))
-    reg = outcome.model.statistics.get("sweep_analysis", {}).get("registration", {})
-    if isinstance(reg, dict) and reg.get("rms_mm") is not None:
-        print(f"tracker registration: RMS {reg['rms_mm']:.4f} mm")
-        outliers = reg.get("outlier_rows") or []
-        if outliers:
-            print(f"outlier rows left out ({len(outliers)}): "
-                  f"{', '.join(str(r) for r in outliers[:20])}{' …' if len(outliers) > 20 else ''}")
+                                      policy=args.outside_range)
     validation = None
     if args.validation:
         validation = pipeline.predicted_before_after(outcome, args.validation)
+    lines = [outcome.model.summary(), pipeline.fit_summary(outcome.model)]
+    reg = outcome.model.statistics.get("sweep_analysis", {}).get("registration", {})
+    if isinstance(reg, dict) and reg.get("rms_mm") is not None:
+        lines.append(f"tracker registration: RMS {reg['rms_mm']:.4f} mm")
+        outliers = reg.get("outlier_rows") or []
+        if outliers:
+            lines.append(f"outlier rows left out ({len(outliers)}): "
+                         f"{', '.join(str(r) for r in outliers[:20])}"
+                         f"{' …' if len(outliers) > 20 else ''}")
+    report = None
     if args.report:
         report = pipeline.accuracy_report_for(
             outcome, validation=validation, title=f"rapidfix fit: {output.name}",
             notes=["Validation 'after' is predicted, not executed: the measured position "
                    "minus the model's prediction, i.e. what compensation would leave."]
             if validation is not None else [])
-        html_path, json_path = write_report(report, args.report)
-        print(f"wrote {html_path} and {json_path}")
     if validation is not None:
         _, numbers = validation_section(validation)
-        print(pipeline.before_after_table({"validation": numbers}, after_label="after*"))
-        print("* predicted: measured minus model prediction, what compensation would leave")
+        lines.append(pipeline.before_after_table({"validation": numbers}, after_label="after*"))
+        lines.append("* predicted: measured minus model prediction, what compensation "
+                     "would leave")
+    print("\n".join(lines))
+    if report is not None:
+        html_path, json_path = write_report(report, args.report)
+        print(f"wrote {html_path} and {json_path}")
+    save_model(outcome.model, output)
     print(f"wrote {output}")

@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rapidfix.exceptions import OutputExistsError
+from rapidfix.exceptions import UsageError
+from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
     from rapidfix.postprocess.rewrite import RewriteOptions
@@ -82,20 +83,20 @@ def run(args: argparse.Namespace) -> int:
 
     source = Path(args.program)
     if args.in_place:
-        if args.output is not None and Path(args.output).resolve() != source.resolve():
-            raise OutputExistsError("give either -o OUT or --in-place, not both")
+        if args.output is not None:
+            raise UsageError("give either -o OUT or --in-place, not both")
         target = source
     elif args.output is None:
-        raise OutputExistsError("no output file given", hint="use -o OUT, or --in-place")
+        raise UsageError("no output file given", hint="use -o OUT, or --in-place")
     else:
-        target = Path(args.output)
+        target = check_output_file(args.output, inputs=[source])
     options = options_from_args(args)
     comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
     result = rewrite_file(source, target, comp, options, in_place=args.in_place)
     for line in result.report_lines():
         print(line)
     for skipped in result.skipped:
-        print(f"warning: {skipped}", file=sys.stderr)
+        print(f"rapidfix: warning: {skipped}", file=sys.stderr)
     for warning in result.warnings:
         print(f"rapidfix: warning: {warning}", file=sys.stderr)
     if result.skipped and options.strict:

@@ -6,6 +6,7 @@ import argparse
 import json
 
 from rapidfix.exceptions import RapidfixError
+from rapidfix.paths import check_output_dir
 from rapidfix.sim import EFFECTS, simulate_cell
 from rapidfix.sim.virtual_robot import DEFAULT_ROBOT
 
@@ -28,9 +29,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         metavar="NAME", help="add a hidden effect; repeatable. One of: "
                         + ", ".join(EFFECTS))
     parser.add_argument("--robot", default=DEFAULT_ROBOT, help=f"robot model ({DEFAULT_ROBOT})")
-    parser.add_argument("--calibration-points", type=int, default=60, metavar="N")
-    parser.add_argument("--validation-points", type=int, default=40, metavar="N")
-    parser.add_argument("--repeats", type=int, default=3, help="repeats of each sweep")
+    parser.add_argument("--calibration-points", type=int, default=60, metavar="N",
+                        help="random poses measured for calibration.csv (default 60)")
+    parser.add_argument("--validation-points", type=int, default=40, metavar="N",
+                        help="random poses measured for validation.csv (default 40)")
+    parser.add_argument("--repeats", type=int, default=3, metavar="N",
+                        help="measurements of each sweep angle (default 3)")
     parser.add_argument("--step", type=float, default=5.0, metavar="DEG",
                         help="sweep step in degrees (default 5)")
     parser.add_argument("--outliers", type=int, default=0, metavar="N",
@@ -61,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
         raise RapidfixError("--step must be between 0.5 and 45 degrees")
     if args.outliers < 0 or args.payload < 0:
         raise RapidfixError("--outliers and --payload must not be negative")
-    out = simulate_cell(args.out_dir, seed=args.seed, effects=tuple(dict.fromkeys(args.effect)),
+    out_dir = check_output_dir(args.out_dir, "measurement set folder")
+    out = simulate_cell(out_dir, seed=args.seed, effects=tuple(dict.fromkeys(args.effect)),
                         robot=args.robot, overwrite=args.force,
                         n_calibration=args.calibration_points,
                         n_validation=args.validation_points, repeats=args.repeats,

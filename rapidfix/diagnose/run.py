@@ -24,7 +24,13 @@ from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import file_sha256, load_model, save_model
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, load_robot
-from rapidfix.measure.files import PointTable, Setup, read_points, read_setup
+from rapidfix.measure.files import (
+    PointTable,
+    Setup,
+    read_points,
+    read_setup,
+    robot_reach_mm,
+)
 from rapidfix.report.document import Report, write_report
 
 #: fewest calibration points accepted (the richest candidate has ~40 parameters)
@@ -134,8 +140,9 @@ def diagnose_files(model_path: str | Path, setup_path: str | Path,
     setup = read_setup(setup_path)
     robot_model = load_robot(robot or setup.robot)
     model = load_model(model_path, robot_model.name)
-    calibration = read_points(calibration_path)
-    validation = read_points(validation_path)
+    reach = robot_reach_mm(robot_model)
+    calibration = read_points(calibration_path, reach_mm=reach)
+    validation = read_points(validation_path, reach_mm=reach)
     files = [{"name": Path(calibration_path).name, "sha256": file_sha256(calibration_path),
               "role": "calibration"},
              {"name": Path(validation_path).name, "sha256": file_sha256(validation_path),

@@ -239,19 +239,70 @@ def effect_from_dict(data: dict[str, Any], where: str = "effect") -> Effect:
             f"{where}: unknown effect type {kind!r}", hint=f"known: {', '.join(sorted(types))}"
         )
     cls = types[kind]
+    if not isinstance(values, dict):
+        raise ModelError(f"{where}.params: an object of named numbers expected",
+                         column="params")
     try:
-        effect = cls._from_state(name, data.get("state", {}))
+        state = data.get("state", {})
+        _check_finite(state, f"{where}.state")
+        effect = cls._from_state(name, state)
         names = effect.param_names
         missing = [n for n in names if n not in values]
         if missing:
             raise ModelError(f"{where}.params: missing {missing[0]!r}", column=missing[0])
-        effect.set_params(np.array([float(values[n]) for n in names]))
+        extra = [n for n in values if n not in names]
+        if extra:
+            raise ModelError(f"{where}.params: unexpected {extra[0]!r} (the effect's state "
+                             f"describes {len(names)} parameters, the file holds "
+                             f"{len(values)})", column=extra[0])
+        effect.set_params(np.array([_parameter(values[n], f"{where}.params", n)
+                                    for n in names]))
         if "uncertainty" in data:
             unc = data["uncertainty"]
-            effect.uncertainty = np.array([float(unc[n]) for n in names])
+            if not isinstance(unc, dict):
+                raise ModelError(f"{where}.uncertainty: an object expected",
+                                 column="uncertainty")
+            effect.uncertainty = np.array([_parameter(unc[n], f"{where}.uncertainty", n)
+                                           for n in names])
         effect.free = bool(data.get("free", True))
     except ModelError:
         raise
-    except (KeyError, TypeError, ValueError) as err:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError) as err:
         raise ModelError(f"{where}: malformed effect data ({err})") from None
     return effect
+
+
+#: Largest magnitude of a parameter: ±10 turns for angles (names ending _rad), else 1e6
+#: of its unit (mm, ppm, …). Anything larger is a corrupt file, not a robot.
+MAX_ABS_RAD = 20.0 * np.pi
+MAX_ABS_OTHER = 1e6
+
+
+def _parameter(value: Any, where: str, name: str) -> float:
+    """One parameter value: a finite number within its physical bound."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ModelError(f"{where}: {name!r} is not a number ({value!r})", column=name)
+    try:
+        x = float(value)
+    except OverflowError:
+        x = float("inf")
+    bound = MAX_ABS_RAD if name.endswith("_rad") else MAX_ABS_OTHER
+    if not np.isfinite(x):
+        raise ModelError(f"{where}: {name!r} is not a finite number of its unit",
+                         column=name)
+    if abs(x) > bound:
+        raise ModelError(f"{where}: {name!r} = {x:g} is beyond the physical bound "
+                         f"±{bound:g}", column=name)
+    return x
+
+
+def _check_finite(value: Any, where: str) -> None:
+    """Every number in nested JSON data is finite (json reads NaN and Infinity)."""
+    if isinstance(value, float) and not np.isfinite(value):
+        raise ModelError(f"{where}: {value!r} is not finite", column=where.rsplit(".", 1)[-1])
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _check_finite(item, f"{where}.{key}")
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            _check_finite(item, f"{where}[{i}]")

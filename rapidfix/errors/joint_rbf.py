@@ -36,6 +36,8 @@ WIDTH_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 9.0, 13.0)
 #: smoothing grid (penalty per data point on the Gaussian weights)
 SMOOTHINGS = (1e-8, 1e-6, 1e-4, 1e-3, 1e-2, 1e-1)
 MAX_CENTRES = 150
+#: valid ranges and widths beyond ±10 turns are not a robot's
+MAX_ABS_ANGLE_RAD = 20.0 * np.pi
 #: angles this close to the range edge count as inside (rad; far below 1e-9°)
 _EDGE_TOL = 1e-12
 
@@ -126,13 +128,42 @@ class RBFNetwork:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RBFNetwork:
-        """Inverse of to_dict (weights zero until set)."""
+        """Inverse of to_dict (weights zero until set); ModelError for a malformed network.
+
+        A network as `fit_network` makes it: centres strictly increasing, evenly spaced
+        from one end of the valid range to the other (so a cut array is caught), the
+        range within ±10 turns, a positive width and a non-negative smoothing.
+        """
         centres = np.asarray(data["centres_rad"], dtype=float)
-        lo, hi = (float(v) for v in data["range_rad"])
-        net = cls(centres, float(data["width_rad"]), lo, hi, float(data["smoothing"]))
+        rng = np.asarray(data["range_rad"], dtype=float)
+        if rng.shape != (2,) or not np.all(np.isfinite(rng)) or not rng[0] < rng[1] \
+                or np.max(np.abs(rng)) > MAX_ABS_ANGLE_RAD:
+            raise ModelError(f"range_rad {data['range_rad']!r} is not an interval [lo, hi] "
+                             "within ±10 turns", column="range_rad")
+        lo, hi = float(rng[0]), float(rng[1])
+        if centres.ndim != 1 or not 1 <= centres.shape[0] <= MAX_CENTRES \
+                or not np.all(np.isfinite(centres)):
+            raise ModelError(f"centres_rad must be 1 to {MAX_CENTRES} finite angles",
+                             column="centres_rad")
+        expected = np.linspace(lo, hi, centres.shape[0])
+        if centres.shape[0] > 1 and not np.allclose(centres, expected, rtol=0.0,
+                                                    atol=1e-9 * max(1.0, hi - lo)):
+            raise ModelError(f"centres_rad ({centres.shape[0]} values) do not spread evenly "
+                             f"over range_rad [{lo:.6g}, {hi:.6g}]: a cut or altered array",
+                             column="centres_rad")
+        width, smoothing = float(data["width_rad"]), float(data["smoothing"])
+        if not (np.isfinite(width) and 0.0 < width <= MAX_ABS_ANGLE_RAD):
+            raise ModelError(f"width_rad {width!r} must be a positive angle", column="width_rad")
+        if not (np.isfinite(smoothing) and smoothing >= 0.0):
+            raise ModelError(f"smoothing {smoothing!r} must be finite and not negative",
+                             column="smoothing")
+        net = cls(centres, width, lo, hi, smoothing)
         net.weights = np.zeros(net.n_params)
         cv = data.get("cv_rms_rad")
         net.cv_rms = None if cv is None else float(cv)
+        if net.cv_rms is not None and not (np.isfinite(net.cv_rms) and net.cv_rms >= 0.0):
+            raise ModelError(f"cv_rms_rad {cv!r} must be finite and not negative",
+                             column="cv_rms_rad")
         return net
 
 
@@ -300,6 +331,10 @@ class JointRBF(Effect):
                 net.weights = p[start : start + net.n_params].copy()
                 start += net.n_params
 
+    def reset_warnings(self) -> None:
+        """Warn again (once per joint) from now on, e.g. for the next file of a batch."""
+        self._warned.clear()
+
     @property
     def valid_range(self) -> np.ndarray:
         """(6, 2) rad; NaN rows for joints without a network."""
@@ -355,13 +390,16 @@ class JointRBF(Effect):
     @classmethod
     def _from_state(cls, name: str, state: dict[str, Any]) -> JointRBF:
         nets = state["networks"]
-        if len(nets) != 6:
-            raise ValueError(f"{len(nets)} networks, 6 expected")
-        return cls(
-            [None if n is None else RBFNetwork.from_dict(n) for n in nets],
-            name,
-            policy=state.get("policy", "clamp"),
-        )
+        if not isinstance(nets, list) or len(nets) != 6:
+            raise ValueError("state.networks must be a list of 6 networks (or null)")
+        networks: list[RBFNetwork | None] = []
+        for j, n in enumerate(nets):
+            try:
+                networks.append(None if n is None else RBFNetwork.from_dict(n))
+            except ModelError as err:
+                raise ModelError(f"joint {j + 1} network: {err.message}",
+                                 column=f"networks[{j}].{err.column}") from None
+        return cls(networks, name, policy=state.get("policy", "clamp"))
 
     def describe(self) -> str:
         """One line: which joints are modelled."""

@@ -22,8 +22,17 @@ if TYPE_CHECKING:
     from rapidfix.kinematics.model import RobotModel
 
 QUADRANT = np.pi / 2
-CONF_TOL = 1e-9
-"""Angles (rad) and distances (mm) this close to a quadrant or side boundary match both sides."""
+CONF_TOL = np.radians(0.01)
+"""Angles (rad) this close to a quadrant boundary (or θ5 this close to 0) match both sides.
+
+0.01°: programs store positions to 0.001 mm and quaternions to ~9 decimals, so a target
+written with j4 = j6 = 0 comes back from IK off by up to ~1e-5° (more near the wrist
+singularity) and may land on either side of the boundary. 0.01° is far above that
+rounding and far below any pose a controller would tell apart by its confdata.
+"""
+CONF_TOL_MM = 0.01
+"""Wrist-centre distances (mm) this close to the axis-1 or lower-arm side boundary match
+both sides (the cfx bits 4 and 2), for the same reason as CONF_TOL."""
 
 
 def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
@@ -72,9 +81,11 @@ def confdata(model: RobotModel, q: np.ndarray) -> np.ndarray:
 
 
 def conf_matches(
-    model: RobotModel, q: np.ndarray, conf: np.ndarray, tol: float = CONF_TOL
+    model: RobotModel, q: np.ndarray, conf: np.ndarray, tol: float = CONF_TOL,
+    tol_mm: float = CONF_TOL_MM,
 ) -> np.ndarray:
-    """(...,) mask: joints q (..., 6) have confdata `conf` (..., 4); boundaries match both."""
+    """(...,) mask: joints q (..., 6) have confdata `conf` (..., 4); values within `tol`
+    (rad) or `tol_mm` of a boundary match both sides."""
     k = conf_quantities(model, q)
     conf = np.asarray(conf)
     with np.errstate(invalid="ignore"):
@@ -84,10 +95,10 @@ def conf_matches(
             hi = np.floor((k[..., j] + tol) / QUADRANT)
             ok &= (lo <= conf[..., j]) & (conf[..., j] <= hi)
         cfx = conf[..., 3]
-        for bit, j in ((4, 3), (2, 4), (1, 5)):
+        for bit, j, t in ((4, 3, tol_mm), (2, 4, tol_mm), (1, 5, tol)):
             wants_neg = (cfx & bit) != 0
             value = k[..., j]
-            ok &= np.where(wants_neg, value < tol, value > -tol)
+            ok &= np.where(wants_neg, value < t, value > -t)
     return ok & np.all(np.isfinite(k), axis=-1)
 
 
@@ -130,7 +141,7 @@ def select_by_conf(
     match = np.zeros((n, 8), dtype=bool)
     match[rows, branches] = conf_matches(model, q_cand, conf[rows])
     found = match.any(axis=1)
-    chosen = np.argmax(match, axis=1)
+    chosen = _prefer_exact(match, rows, branches, model, q_cand, conf[rows])
     q = np.full((n, 6), np.nan)
     q[found] = sols.base_q[found, chosen[found]] + 2.0 * np.pi * first[found, chosen[found]]
     status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
@@ -145,6 +156,20 @@ def select_by_conf(
     if redo.size:
         q[redo], status[redo] = _select_expanded(model, _take(sols, redo), conf[redo])
     return q, status
+
+
+#: the boundary tolerance of an exact match (rad or mm), preferred over a rounded one
+EXACT_TOL = 1e-9
+
+
+def _prefer_exact(match: np.ndarray, rows: np.ndarray, branches: np.ndarray,
+                  model: RobotModel, q_cand: np.ndarray, conf: np.ndarray) -> np.ndarray:
+    """Per pose the first matching slot, one that matches exactly (not only within the
+    rounding tolerance of a boundary) if there is one."""
+    exact = np.zeros_like(match)
+    exact[rows, branches] = conf_matches(model, q_cand, conf, EXACT_TOL, EXACT_TOL)
+    exact &= match
+    return np.where(exact.any(axis=1), np.argmax(exact, axis=1), np.argmax(match, axis=1))
 
 
 def _turns_on_conf(sols: IKSolutions, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ import io
 import math
 import re
 import sys
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.exceptions import KinematicsError, MeasurementError
+from rapidfix.exceptions import KinematicsError, MeasurementError, RapidfixWarning
 from rapidfix.kinematics import load_robot
 
 if sys.version_info >= (3, 11):
@@ -49,6 +50,17 @@ METRES_LIMIT_MM = 20.0
 #: Five or more poses whose every joint stays within ±2π, though some joint moves by
 #: more than 1 (57° if radians), look like radians.
 RADIANS_LIMIT = 2.0 * math.pi + 1e-9
+#: Physical bounds: a joint angle beyond ±10 turns, or a position farther than
+#: REACH_FACTOR × the robot's reach from the origin, is not a measurement but a bad cell
+#: (such numbers would overflow the fits instead of being told apart as outliers).
+MAX_ABS_ANGLE_DEG = 3600.0
+REACH_FACTOR = 10.0
+#: reach assumed when the robot is not known yet (larger than any ABB arm's)
+DEFAULT_REACH_MM = 5000.0
+#: the farthest a target ball may sit from the flange (mm)
+MAX_SMR_OFFSET_MM = 5000.0
+#: physical ranges of the condition columns (kg, s, °C)
+CONDITION_BOUNDS = {"payload_kg": (0.0, 1e4), "time_s": (-1e9, 1e9), "temp_c": (-273.15, 1e3)}
 
 
 @dataclass(frozen=True)
@@ -113,6 +125,14 @@ class PointTable:
 # --------------------------------------------------------------------------- setup
 
 
+#: the keys setup.toml may hold; any other is reported and ignored
+SETUP_KEYS = ("robot", "smr_offset_mm", "tracker_sigma_mm", "payload_kg")
+
+
+class MeasurementWarning(RapidfixWarning):
+    """Something in a measurement file that is ignored (e.g. an unknown setup key)."""
+
+
 def _toml_line(text: str, key: str) -> int | None:
     """The line on which `key = ...` is written, for error messages."""
     match = re.search(rf"^\s*{re.escape(key)}\s*=", text, flags=re.MULTILINE)
@@ -148,7 +168,8 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         try:
             load_robot(robot)
         except KinematicsError as err:
-            raise fail("robot", f"unknown robot {robot!r}: {err.message}") from None
+            raise fail("robot", err.message if repr(robot) in err.message
+                       else f"unknown robot {robot!r}: {err.message}") from None
 
     smr = data.get("smr_offset_mm")
     if (
@@ -157,10 +178,16 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in smr)
     ):
         raise fail("smr_offset_mm", "'smr_offset_mm' must be three numbers [x, y, z] in mm")
-    smr_arr = np.asarray(smr, dtype=float)
+    try:
+        smr_arr = np.asarray(smr, dtype=float)
+    except OverflowError:
+        raise fail("smr_offset_mm", "'smr_offset_mm' must be finite") from None
     if not np.all(np.isfinite(smr_arr)):
         raise fail("smr_offset_mm", "'smr_offset_mm' must be finite")
     norm = float(np.linalg.norm(smr_arr))
+    if norm > MAX_SMR_OFFSET_MM:
+        raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} mm long: no target ball "
+                   f"sits more than {MAX_SMR_OFFSET_MM:g} mm from the flange")
     if 0.0 < norm < 1.0:
         raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} long: "
                    "this looks like metres, the file needs mm")
@@ -170,8 +197,13 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         raise fail("tracker_sigma_mm", f"'tracker_sigma_mm' = {sigma} mm is implausible "
                    "for a laser tracker (give mm, e.g. 0.005)")
     payload = _positive_number(data, "payload_kg", fail, optional=True, allow_zero=True)
-    known = {"robot", "smr_offset_mm", "tracker_sigma_mm", "payload_kg"}
-    extra = {k: v for k, v in data.items() if k not in known}
+    if payload is not None and payload > CONDITION_BOUNDS["payload_kg"][1]:
+        raise fail("payload_kg", f"'payload_kg' = {payload:g} kg is beyond any robot's payload")
+    extra = {k: v for k, v in data.items() if k not in SETUP_KEYS}
+    for key in extra:
+        where = _toml_line(text, key)
+        warnings.warn(f"{path}{f':{where}' if where else ''}: unknown key {key!r} ignored "
+                      f"(known: {', '.join(SETUP_KEYS)})", MeasurementWarning, stacklevel=2)
     return Setup(robot=robot, smr_offset_mm=smr_arr, tracker_sigma_mm=sigma,
                  payload_kg=0.0 if payload is None else payload, path=path, extra=extra)
 
@@ -181,7 +213,8 @@ def _positive_number(data: Mapping[str, Any], key: str, fail: Any, *, optional: 
     value = data.get(key)
     if value is None and optional:
         return None
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+    if (not isinstance(value, (int, float)) or isinstance(value, bool)
+            or not math.isfinite(float(value) if abs(value) < 1e300 else math.inf)):
         raise fail(key, f"'{key}' must be a finite number")
     if value < 0 or (value == 0 and not allow_zero):
         raise fail(key, f"'{key}' must be {'non-negative' if allow_zero else 'positive'}")
@@ -319,6 +352,28 @@ def _check_units(raw: _RawTable, joints_deg: np.ndarray, xyz: np.ndarray) -> Non
             file=raw.path, row=int(raw.rows[0]), column="j1")
 
 
+def robot_reach_mm(robot: Any) -> float:
+    """An upper bound of the flange's distance from the base origin (mm): the chain of
+    axis points and the tool0 home position, link by link."""
+    points = np.vstack([np.zeros(3), np.asarray(robot.axis_points, dtype=float),
+                        np.asarray(robot.home, dtype=float)[:3, 3]])
+    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
+
+
+def _check_bounds(raw: _RawTable, joints_deg: np.ndarray, xyz: np.ndarray,
+                  reach_mm: float | None) -> None:
+    """Refuse finite but absurd cells: angles beyond ±10 turns, positions beyond 10× reach."""
+    limit_mm = REACH_FACTOR * (reach_mm if reach_mm else DEFAULT_REACH_MM)
+    for values, names, limit, unit in ((joints_deg, JOINT_COLUMNS, MAX_ABS_ANGLE_DEG, "°"),
+                                       (xyz, XYZ_COLUMNS, limit_mm, " mm")):
+        bad = np.abs(values) > limit
+        if bad.any():
+            i, k = np.argwhere(bad)[0]
+            raise MeasurementError(
+                f"{raw.column(names[k])[i]!r} is beyond the physical bound ±{limit:.6g}{unit}",
+                file=raw.path, row=int(raw.rows[i]), column=names[k])
+
+
 def _check_duplicates(raw: _RawTable, values: np.ndarray) -> None:
     """Two rows identical in every numeric column are a copy, not a measurement."""
     _, first, inverse = np.unique(values, axis=0, return_index=True, return_inverse=True)
@@ -340,6 +395,14 @@ def _optional_columns(raw: _RawTable, skip: Sequence[str]) -> tuple[dict, dict]:
         i = int(np.argmax(payload < 0))
         raise MeasurementError("payload must not be negative", file=raw.path,
                                row=int(raw.rows[i]), column="payload_kg")
+    for name, (low, high) in CONDITION_BOUNDS.items():
+        values = conditions[name]
+        bad = None if values is None else (values < low) | (values > high)
+        if bad is not None and bad.any():
+            i = int(np.argmax(bad))
+            raise MeasurementError(f"{raw.column(name)[i]!r} is outside the physical range "
+                                   f"[{low:g}, {high:g}]", file=raw.path,
+                                   row=int(raw.rows[i]), column=name)
     known = set(skip) | set(CONDITION_COLUMNS)
     extra = {name: _numbers(raw, name) for name in raw.header if name not in known}
     return conditions, extra
@@ -348,14 +411,19 @@ def _optional_columns(raw: _RawTable, skip: Sequence[str]) -> tuple[dict, dict]:
 # --------------------------------------------------------------------------- tables
 
 
-def read_sweeps(path: str | Path) -> SweepTable:
-    """Read and validate a sweeps CSV (see module docstring)."""
+def read_sweeps(path: str | Path, *, reach_mm: float | None = None) -> SweepTable:
+    """Read and validate a sweeps CSV (see module docstring).
+
+    `reach_mm` (the robot's reach, `robot_reach_mm`) bounds the positions; without it
+    a reach larger than any ABB arm's is assumed.
+    """
     raw = _read_raw(Path(path), SWEEP_COLUMNS)
     joint = _integers(raw, "sweep_joint", 1, 6) - 1
     q_deg = np.column_stack([_numbers(raw, c) for c in JOINT_COLUMNS])
     repeat = _integers(raw, "repeat", 0, None)
     xyz = np.column_stack([_numbers(raw, c) for c in XYZ_COLUMNS])
     conditions, extra = _optional_columns(raw, SWEEP_COLUMNS)
+    _check_bounds(raw, q_deg, xyz, reach_mm)
     _check_units(raw, q_deg, xyz)
     stacked = [joint[:, None], q_deg, repeat[:, None], xyz]
     stacked += [v[:, None] for v in conditions.values() if v is not None]
@@ -364,8 +432,9 @@ def read_sweeps(path: str | Path) -> SweepTable:
                       rows=raw.rows, extra=extra, path=raw.path, **conditions)
 
 
-def read_points(path: str | Path) -> PointTable:
-    """Read and validate a points CSV (calibration, validation or ballbar run)."""
+def read_points(path: str | Path, *, reach_mm: float | None = None) -> PointTable:
+    """Read and validate a points CSV (calibration, validation or ballbar run);
+    `reach_mm` as in `read_sweeps`."""
     raw = _read_raw(Path(path), POINT_COLUMNS)
     ids = np.asarray(raw.column("point_id"), dtype=object)
     empty = ids == ""
@@ -383,6 +452,7 @@ def read_points(path: str | Path) -> PointTable:
     q_deg = np.column_stack([_numbers(raw, c) for c in JOINT_COLUMNS])
     xyz = np.column_stack([_numbers(raw, c) for c in XYZ_COLUMNS])
     conditions, extra = _optional_columns(raw, POINT_COLUMNS)
+    _check_bounds(raw, q_deg, xyz, reach_mm)
     _check_units(raw, q_deg, xyz)
     stacked = [q_deg, xyz] + [v[:, None] for v in conditions.values() if v is not None]
     _check_duplicates(raw, np.hstack(stacked))

@@ -424,6 +424,27 @@ class _Solver:
         return x
 
 
+#: share of rows, the best fitting ones, whose RMS the rigid-fit check judges
+RIGID_CHECK_SHARE = 0.75
+
+
+def _trimmed_rms(residuals_mm: np.ndarray, share: float = RIGID_CHECK_SHARE) -> float:
+    """RMS of the smallest `share` of the residuals (gross outliers left aside)."""
+    r = np.sort(np.asarray(residuals_mm, dtype=float))
+    k = max(1, int(np.ceil(share * r.shape[0])))
+    return float(np.sqrt(np.mean(r[:k] ** 2)))
+
+
+def _check_rigid_rms(rms_mm: float, sweeps: SweepTable, robot: RobotModel) -> None:
+    """Refuse data the robot model cannot explain (wrong robot, ball offset or units)."""
+    if not rms_mm <= MAX_RIGID_RMS_MM:
+        raise MeasurementError(
+            f"the measured positions are {rms_mm:.1f} mm RMS from what the robot model "
+            f"{robot.name!r} predicts, even after the best rigid fit (the limit is "
+            f"{MAX_RIGID_RMS_MM:g} mm)", file=sweeps.path,
+            hint="check robot, smr_offset_mm, that x, y, z are mm and j1..j6 degrees")
+
+
 def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
                    prior_deg: float = 5.0, max_rounds: int = 20) -> SweepAnalysis:
     """Recover Δθ at every swept commanded angle and the tracker pose (see module doc).
@@ -437,11 +458,9 @@ def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
     prob = _index(sweeps)
 
     initial = register(_ball(robot, sweeps.q, smr), sweeps.xyz, rows=sweeps.rows)
-    if initial.rms_mm > MAX_RIGID_RMS_MM:
-        raise MeasurementError(
-            f"the measured positions are {initial.rms_mm:.1f} mm RMS from what the robot model "
-            f"{robot.name!r} predicts, even after the best rigid fit", file=sweeps.path,
-            hint="check robot, smr_offset_mm, that x, y, z are mm and j1..j6 degrees")
+    # The robust fit may leave out up to half the rows, so its own RMS can look fine on
+    # data of another robot: judge the best three quarters of all rows instead.
+    _check_rigid_rms(_trimmed_rms(initial.residuals_mm), sweeps, robot)
     sigma = setup.tracker_sigma_mm or DEFAULT_SIGMA_MM
     solver = _Solver(sweeps, robot, smr, prob, initial.R, sigma, np.radians(prior_deg))
     x = np.zeros(6 + solver.n_free)
@@ -462,6 +481,8 @@ def analyse_sweeps(setup: Setup, sweeps: SweepTable, robot: RobotModel, *,
     R, t, delta = _apply_gauge(R_fit, t, delta, prob, robot)
     reg = Registration(R=R, t=t, rms_mm=float(np.sqrt(np.mean(resid[keep] ** 2))),
                        outlier_rows=sweeps.rows[~keep], residuals_mm=resid, inliers=keep)
+    # Free joint errors can absorb much of a wrong model; what they cannot is refused.
+    _check_rigid_rms(reg.rms_mm, sweeps, robot)
     std, cov_diag = _standard_errors(solver, x, all_rows[keep], prob)
     play = prob.extra(x, prob.play_col)
     play_std = np.where(prob.play_col >= 0, np.sqrt(prob.extra(cov_diag, prob.play_col)),

@@ -12,13 +12,18 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
+import sys
+import threading
+import time
+import warnings
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rapidfix.atomic import write_bytes_atomic
+from rapidfix.atomic import exit_on_sigterm, write_bytes_atomic
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.header import read_header, sha256_file
@@ -115,6 +120,15 @@ def discover(in_dir: Path) -> list[Path]:
     return found
 
 
+def _size(path: Path) -> int:
+    """The file's size, 0 when it cannot be read (a dangling symlink, a symlink loop:
+    the job then reports the error as that file's row)."""
+    try:
+        return path.stat().st_size
+    except OSError:
+        return 0
+
+
 def is_rapid(path: Path) -> bool:
     """True for the file kinds the post-processor rewrites."""
     return path.suffix.lower() in RAPID_SUFFIXES
@@ -159,7 +173,23 @@ def _from_summary(rel: str, summary: str) -> FileOutcome:
 
 
 def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) -> FileOutcome:
-    """Rewrite or copy one file; every project error becomes an 'error' outcome."""
+    """Rewrite or copy one file; every project error becomes an 'error' outcome and every
+    user warning (e.g. a joint clamped to the model's range) a 'warnings' outcome."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        outcome = _process_file(source, target, rel, settings)
+    messages = list(dict.fromkeys(str(w.message) for w in caught
+                                  if issubclass(w.category, UserWarning)))
+    if messages and outcome.status == "ok":
+        outcome.status = "warnings"
+    if messages and not outcome.message:
+        outcome.message = messages[0]
+    return outcome
+
+
+def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
+                  ) -> FileOutcome:
+    """The work of `process_file`."""
     try:
         if not is_rapid(source):
             data = source.read_bytes()
@@ -167,6 +197,8 @@ def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) 
                 write_bytes_atomic(target, data)
             return FileOutcome(rel, "copied")
         comp = _compensator(settings)
+        for effect in comp.model.effects:  # each file warns for itself
+            getattr(effect, "reset_warnings", lambda: None)()
         if settings.in_place and not settings.options.force:
             header = read_header(source.read_bytes().decode("latin-1"))
             if header is not None:
@@ -236,7 +268,7 @@ def run_batch(
         files = [f for f in files if is_rapid(f)]
     jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings) for f in files]
     # largest files first, so no worker is left with a big one at the end
-    jobs.sort(key=lambda job: -Path(job[0]).stat().st_size)
+    jobs.sort(key=lambda job: -_size(Path(job[0])))
     # fail early, once, on a bad model or robot instead of once per file
     _compensator(settings)
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
@@ -248,16 +280,7 @@ def run_batch(
                 outcomes.append(_job(job))
                 _advance(bar, outcomes[-1], on_result)
         else:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(_job, job): job for job in jobs}
-                for future in as_completed(futures):
-                    try:
-                        outcome = future.result()
-                    except Exception as err:  # a worker died: report the file, keep going
-                        outcome = FileOutcome(futures[future][2], "error",
-                                              message=f"internal error: {err!r}")
-                    outcomes.append(outcome)
-                    _advance(bar, outcome, on_result)
+            _run_parallel(jobs, workers, outcomes, bar, on_result)
     finally:
         if bar is not None:
             bar.close()
@@ -265,8 +288,72 @@ def run_batch(
     return BatchSummary(outcomes)
 
 
+def _run_parallel(jobs: list[tuple[str, str, str, BatchSettings]], workers: int,
+                  outcomes: list[FileOutcome], bar: Any,
+                  on_result: Callable[[FileOutcome], None] | None) -> None:
+    """Run the jobs on a process pool, at most one per worker at a time.
+
+    Nothing waits in the pool's queue, so when Ctrl-C or SIGTERM interrupts the batch no
+    new file starts: the workers are terminated at once (each removes the temporary
+    file of the write it was doing) and the interruption is raised.
+    """
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
+    pending = iter(jobs)
+    running: dict[Future, tuple] = {}
+
+    def submit_next() -> None:
+        job = next(pending, None)
+        if job is not None:
+            running[pool.submit(_job, job)] = job
+
+    try:
+        for _ in range(workers):
+            submit_next()
+        while running:
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                job = running.pop(future)
+                try:
+                    outcome = future.result()
+                except Exception as err:  # a worker died: report the file, keep going
+                    outcome = FileOutcome(job[2], "error", message=f"internal error: {err!r}")
+                outcomes.append(outcome)
+                _advance(bar, outcome, on_result)
+                submit_next()
+    except BaseException:
+        _stop(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and terminate the workers (SIGTERM: they clean up)."""
+    processes = list(getattr(pool, "_processes", {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=5)
+
+
+def _worker_init() -> None:
+    """A worker leaves Ctrl-C to the main process (which stops it) and, on SIGTERM,
+    removes the temporary file of the write in progress before it exits."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, exit_on_sigterm)
+    parent = os.getppid()
+
+    def watch() -> None:  # the main process was killed (SIGKILL): stop too
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        exit_on_sigterm(signal.SIGTERM, None)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
 def _progress(total: int, enabled: bool) -> Any:
-    if not enabled:
+    if not enabled or not sys.stderr.isatty():  # no bars in logs
         return None
     from tqdm import tqdm
 

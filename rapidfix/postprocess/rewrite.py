@@ -41,6 +41,7 @@ from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
 from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
 from rapidfix.postprocess.naming import NameAllocator
 from rapidfix.postprocess.path import (
+    MIN_PATH_TOLERANCE_MM,
     Curves,
     Refinement,
     chain_span,
@@ -70,6 +71,8 @@ def _is_fine(program: Program, motion: MotionInstruction) -> bool:
 #: optional arguments left off the intermediate points of a subdivided move
 INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
 INTERMEDIATE_ZONE = "z0"
+#: why a MoveL/MoveC kept its instruction when its start is not known
+START_UNKNOWN = "start not known before run time"
 
 
 @dataclass(frozen=True)
@@ -91,6 +94,10 @@ class RewriteOptions:
             raise RapidfixError(f"--emit must be one of {', '.join(EMIT_CHOICES)}")
         if not (math.isfinite(self.path_tolerance_mm) and self.path_tolerance_mm > 0):
             raise RapidfixError("--path-tolerance must be a positive number of mm")
+        if self.path_tolerance_mm < MIN_PATH_TOLERANCE_MM:
+            raise RapidfixError(
+                f"--path-tolerance {self.path_tolerance_mm:g} mm is below what the model can "
+                f"resolve; give at least {MIN_PATH_TOLERANCE_MM:g} mm")
         if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
             raise RapidfixError(f"--temperature {self.temperature_c:g} °C is not a cell "
                                 "temperature (give degrees Celsius, -50 to 150)")
@@ -149,6 +156,8 @@ class RewriteResult:
     warnings: list[str] = field(default_factory=list)
     #: the model's predicted TCP error of the original program's moves (mean, max), mm
     predicted_before_mm: tuple[float, float] | None = None
+    #: why moves kept their instruction with a filtered robtarget: reason -> count
+    filtered_reasons: dict[str, int] = field(default_factory=dict)
 
     def report_lines(self) -> list[str]:
         """What the command prints."""
@@ -161,9 +170,9 @@ class RewriteResult:
             f", {self.points_added} intermediate points added"
             f", {len(self.skipped)} left as they were"
         )
-        if self.moves_filtered:
-            lines.append(f"  {self.moves_filtered} linear/circular moves kept their instruction "
-                         "with a filtered robtarget (start not known before run time)")
+        for reason, count in self.filtered_reasons.items():
+            lines.append(f"  {count} linear/circular moves kept their instruction "
+                         f"with a filtered robtarget ({reason})")
         lines.extend(f"  {note}" for note in self.notes)
         if self.predicted_before_mm is not None:
             mean, worst = self.predicted_before_mm
@@ -317,6 +326,7 @@ class _Rewriter:
                 site.reason = label + self.plan_.reason[row]
         # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
         self.mode: dict[int, str] = {}
+        self.filtered_reason: dict[int, str] = {}  # site -> why 'filtered' with jointtargets
         for i, site in enumerate(self.sites):
             if site.reason is None:
                 joint = self.options.emit == "jointtargets" and site.kind in "LJC"
@@ -392,6 +402,7 @@ class _Rewriter:
                 starts[int(moves[k])] = start[0]
         for i in moves[~keep].tolist():
             mode[i] = "filtered"
+            self.filtered_reason[i] = START_UNKNOWN
         segs = moves[keep].tolist()
         from_row = start_rows[keep]
         absj = {k: starts[i] for k, i in enumerate(segs) if i in starts}
@@ -435,6 +446,10 @@ class _Rewriter:
         )
         for k in np.flatnonzero(self.refinement.failed):
             self.mode[segs[k]] = "filtered"
+            self.filtered_reason[segs[k]] = (
+                "its arc is degenerate" if curves.degenerate[k] else
+                "no intermediate points keep its path within the path tolerance "
+                f"{self.options.path_tolerance_mm:g} mm")
         self.seg_frames, self.seg_context = frames, seg_ctx
         if seg_ctx.last_direction is not None and self.refinement.seg.size:
             self._redirect(q0c, to_row, take_up.start_dir)
@@ -885,8 +900,13 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         if site.reason is not None:
             job.skipped.append(Skipped(site.where, site.label, site.reason))
     compensated = len(job.mode)
-    filtered = sum(1 for i, m in job.mode.items()
-                   if m == "filtered" and options.emit == "jointtargets")
+    filtered_sites = [i for i, m in job.mode.items()
+                      if m == "filtered" and options.emit == "jointtargets"]
+    filtered = len(filtered_sites)
+    filtered_reasons: dict[str, int] = {}
+    for i in filtered_sites:
+        reason = job.filtered_reason.get(i, START_UNKNOWN)
+        filtered_reasons[reason] = filtered_reasons.get(reason, 0) + 1
     points = 0
     worst_path = None
     if job.refinement is not None:
@@ -906,11 +926,12 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         summary=summary,
         conditions=conditions,
     )
-    if old is not None:
-        _strip_old_header(job.editor, program.text)
-    job.editor.insert(program.modules[0].header_end, header.render(
-        _module_indent(program), "\n"))
-    job.units.comments.extend(header.lines())
+    if compensated:  # the header says "compensated": never on a file where nothing is
+        if old is not None:
+            _strip_old_header(job.editor, program.text)
+        job.editor.insert(program.modules[0].header_end, header.render(
+            _module_indent(program), "\n"))
+        job.units.comments.extend(header.lines())
     output = job.editor.render()
     read = read_back(job.units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
@@ -930,6 +951,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         notes=notes,
         warnings=warnings,
         predicted_before_mm=_predicted_before(job),
+        filtered_reasons=filtered_reasons,
     )
 
 

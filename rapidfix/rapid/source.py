@@ -1,7 +1,8 @@
 """Decoding RAPID source files so that they can be written back byte for byte.
 
 Real programs are UTF-8 (with or without a byte-order mark), UTF-16 with a BOM
-(rare), or a legacy single-byte code page (CP1252 comments are common). The
+(rare; without one it is recognised by its zero bytes and written back without),
+or a legacy single-byte code page (CP1252 comments are common). The
 decoded text keeps every line ending as it was; offsets into it are what the
 parser and the span edits use.
 """
@@ -102,6 +103,8 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
             bom, encoding = mark, name
             break
     body = data[len(bom):]
+    if not encoding:
+        encoding = _utf16_without_bom(body)
     if encoding.startswith("utf-16"):
         try:
             text = body.decode(encoding)
@@ -111,8 +114,11 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
         bad = _first_binary_byte(body)
         if bad >= 0:
             line = body.count(b"\n", 0, bad) + 1
+            looks = (" (it looks like UTF-16 without a byte-order mark, but does not decode "
+                     "as UTF-16)" if body[bad] == 0 and _half_zero(body) else "")
             raise RapidSyntaxError(
-                f"not RAPID text: binary byte 0x{body[bad]:02X} at offset {bad + len(bom)}",
+                f"not RAPID text: binary byte 0x{body[bad]:02X} at offset {bad + len(bom)}"
+                + looks,
                 file=filename,
                 line=line,
             )
@@ -134,6 +140,29 @@ def _first_binary_byte(body: bytes) -> int:
         if byte in _BINARY_BYTES:
             return index
     return -1  # pragma: no cover - unreachable, the translate test found one
+
+
+def _half_zero(body: bytes) -> bool:
+    """Zero bytes in most even or most odd positions: the mark of UTF-16 text."""
+    n = max(1, len(body) // 2)
+    return body[0::2].count(0) >= 0.5 * n or body[1::2].count(0) >= 0.5 * n
+
+
+def _utf16_without_bom(body: bytes) -> str:
+    """"utf-16-le" / "utf-16-be" for text that is evidently UTF-16 without a byte-order
+    mark (a zero byte in every other position, as ASCII text in UTF-16 has), else ""."""
+    if len(body) < 4 or len(body) % 2 or b"\x00" not in body:
+        return ""
+    even, odd = body[0::2], body[1::2]
+    for name, high, low in (("utf-16-le", odd, even), ("utf-16-be", even, odd)):
+        if high.count(0) >= 0.9 * len(high) and low.count(0) == 0:
+            try:
+                text = body.decode(name)
+            except UnicodeDecodeError:
+                continue
+            if _first_binary_byte(text.encode("utf-8", "surrogatepass")) < 0:
+                return name
+    return ""
 
 
 def _decode_8bit(body: bytes) -> tuple[str, str]:

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.exceptions import OutputExistsError
+from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.kinematics import RobotModel
 from rapidfix.measure.files import (
     PointTable,
@@ -36,6 +36,7 @@ from rapidfix.measure.files import (
     write_setup,
     write_sweeps,
 )
+from rapidfix.paths import check_output_dir
 from rapidfix.sim.plans import BallbarPlan, ballbar_plan, point_plan, sweep_plan
 from rapidfix.sim.virtual_robot import (
     DEFAULT_ROBOT,
@@ -129,6 +130,9 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
     xyz = vr.measure(q_all, ctx, frame="tracker", seed=int(noise_ss.generate_state(1)[0]))
 
     outlier_rows: list[int] = []
+    if n_outliers > sizes[0]:
+        raise RapidfixError(f"{n_outliers} outliers asked for, but the sweeps have only "
+                            f"{sizes[0]} rows", hint=f"give at most {sizes[0]}")
     if n_outliers:
         rng = np.random.default_rng(outlier_ss)
         idx = np.sort(rng.choice(sizes[0], n_outliers, replace=False))
@@ -186,7 +190,7 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
 
 def write_set(out_dir: str | Path, data: SimulatedSet, *, overwrite: bool = False) -> Path:
     """Write a simulated set in the shared format (see module doc); returns the folder."""
-    out = Path(out_dir)
+    out = check_output_dir(out_dir, "measurement set folder")
     if not overwrite:
         existing = [name for name in FILES if (out / name).exists()]
         if existing:

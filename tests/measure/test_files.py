@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from rapidfix.exceptions import MeasurementError
 from rapidfix.measure.files import (
+    MeasurementWarning,
     PointTable,
     Setup,
     SweepTable,
@@ -220,7 +221,9 @@ def test_tables_round_trip(tmp_path_factory, n, seed, conditions):
 def test_setup_round_trip(tmp_path):
     setup = Setup("IRB1600-10/1.45", np.array([1.5, -2.0, 100.25]), 0.0125, 7.5,
                   extra={"operator": "test", "tracker_model": "AT960"})
-    back = read_setup(write_setup(tmp_path / "setup.toml", setup))
+    # keys rapidfix does not know are kept, and said to be ignored
+    with pytest.warns(MeasurementWarning, match=r"unknown key '(operator|tracker_model)'"):
+        back = read_setup(write_setup(tmp_path / "setup.toml", setup))
     assert back.robot == setup.robot and back.smr_offset_mm.tolist() == [1.5, -2.0, 100.25]
     assert (back.tracker_sigma_mm, back.payload_kg) == (0.0125, 7.5)
     assert back.extra == {"operator": "test", "tracker_model": "AT960"}

@@ -105,4 +105,4 @@ def test_bad_options_are_user_errors(cell, program, tmp_path, capsys):
         == 1
     )
     assert "made for robot" in capsys.readouterr().err
-    assert main(["rewrite", str(program), "--model", model]) == 1
+    assert main(["rewrite", str(program), "--model", model]) == 2  # no -o: wrong usage
