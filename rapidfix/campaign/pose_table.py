@@ -23,6 +23,7 @@ import numpy as np
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import MeasurementError
+from rapidfix.measure.files import read_measurement_text
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -73,12 +74,7 @@ def write_pose_table(path: str | Path, table: PoseTable) -> Path:
 def read_pose_table(path: str | Path) -> PoseTable:
     """Read and check a pose table; any problem names the file, row and column."""
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise MeasurementError("pose table not found", file=path) from None
-    except UnicodeDecodeError as err:
-        raise MeasurementError(f"not UTF-8 text ({err.reason})", file=path) from None
+    text = read_measurement_text(path, "pose table")
     reader = csv.reader(io.StringIO(text))
     header: list[str] | None = None
     records: list[list[str]] = []

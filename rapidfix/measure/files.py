@@ -133,6 +133,18 @@ class MeasurementWarning(RapidfixWarning):
     """Something in a measurement file that is ignored (e.g. an unknown setup key)."""
 
 
+def read_measurement_text(path: str | Path, what: str = "measurement file") -> str:
+    """A measurement file's text (UTF-8, BOM allowed); a missing file or other bytes
+    are a MeasurementError naming the file."""
+    path = Path(path)
+    try:
+        return path.read_bytes().decode("utf-8-sig")
+    except FileNotFoundError:
+        raise MeasurementError(f"{what} not found", file=path) from None
+    except UnicodeDecodeError as err:
+        raise MeasurementError(f"not UTF-8 text ({err.reason})", file=path) from None
+
+
 def _toml_line(text: str, key: str) -> int | None:
     """The line on which `key = ...` is written, for error messages."""
     match = re.search(rf"^\s*{re.escape(key)}\s*=", text, flags=re.MULTILINE)
@@ -142,12 +154,7 @@ def _toml_line(text: str, key: str) -> int | None:
 def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
     """Read and validate `setup.toml`; with `check_robot` the robot name must be known."""
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise MeasurementError("setup file not found", file=path) from None
-    except UnicodeDecodeError as err:
-        raise MeasurementError(f"not UTF-8 text ({err.reason})", file=path) from None
+    text = read_measurement_text(path, "setup file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -261,12 +268,7 @@ class _RawTable:
 
 
 def _read_raw(path: Path, required: Sequence[str]) -> _RawTable:
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except FileNotFoundError:
-        raise MeasurementError("measurement file not found", file=path) from None
-    except UnicodeDecodeError as err:
-        raise MeasurementError(f"not UTF-8 text ({err.reason})", file=path) from None
+    text = read_measurement_text(path)
     reader = csv.reader(io.StringIO(text))
     header: tuple[str, ...] | None = None
     cells: list[list[str]] = []

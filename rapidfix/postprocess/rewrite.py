@@ -813,6 +813,9 @@ def _run_statement(job: _Rewriter, options: RewriteOptions
                      + (f"; {unknown} move(s) start where the program cannot say before run "
                         "time (first move of a routine, loop or branch): taken midway "
                         "between the directions" if unknown else ""))
+    if options.temperature_c is not None and "temp_c" not in needs:
+        notes.append(f"--temperature {options.temperature_c:g} °C: no effect of the model "
+                     "depends on the cell temperature, so it changes nothing (recorded only)")
     for eff in job.model.robot_effects:
         fields = eff.context_fields()
         reference = getattr(eff, "reference", None)

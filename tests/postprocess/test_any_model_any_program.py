@@ -169,6 +169,8 @@ def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, em
         assert any("--temperature" in w for w in result.warnings)
     if "temp_c" in needs and temperature is not None:
         assert result.header.conditions["temperature_c"] == "23.5"
+    if "temp_c" not in needs and temperature is not None and result.moves_compensated:
+        assert any("changes nothing" in note for note in result.report_lines())
 
 
 def test_measurement_effects_never_move_a_program():
