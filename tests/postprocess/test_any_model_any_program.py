@@ -149,10 +149,10 @@ def models(draw):
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(programs(), models(), st.sampled_from([None, 23.5]),
-       st.sampled_from(["jointtargets", "robtargets"]))
-def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, emit):
+       st.sampled_from(["jointtargets", "robtargets"]), st.booleans())
+def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, emit, approach):
     comp = Compensator(ROBOT, model, "random.json", "0" * 64)
-    options = RewriteOptions(emit=emit, temperature_c=temperature)
+    options = RewriteOptions(emit=emit, temperature_c=temperature, approach=approach)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", OutsideRangeWarning)
