@@ -115,17 +115,17 @@ def diagnose(model: ErrorModel, robot: RobotModel, setup: Setup, calibration: Po
     sel = select(model, robot, cal, val, default_payload_kg=setup.payload_kg,
                  noise_sigma_mm=sigma, candidates=candidates, progress=progress)
     extended = extended_model(model, sel, data_files)
-    unseen = []
+    gauge_notes = []
     if sel.accepted:
         change = resolve_flange_gauge(extended, robot, cal)
         if change is not None:
             extended.statistics["diagnosis"]["flange_gauge"] = change.describe()
-            unseen.append(change.describe())
+            gauge_notes.append(change.describe())
     notes = [f"Fitted on {len(cal)} calibration points only; the {len(val)} validation "
              "points are only predicted.",
              *_history_note(len(calibration) - len(cal), "calibration", "fitted"),
              *_history_note(len(validation) - len(val), "validation", "scored"),
-             *unseen]
+             *gauge_notes]
     report = build_report(sel, robot, cal, val, noise_source=source, title=title, notes=notes)
     return Diagnosis(sel, extended, report, statement(sel), cal, val)
 

@@ -291,8 +291,10 @@ class _Rewriter:
         self.decl_blocks: dict[Any, list[str]] = {}
         self.decl_anchor_order: list[Any] = []
         self.inserted: set[str] = set()
-        #: site index -> arrival direction (6,) of the moves given an approach point
+        #: site index -> arrival direction (6,) of the moves given an approach point, and
+        #: how far (rad, per joint) each approach point stands from its target
         self.approach: dict[int, np.ndarray] = {}
+        self.approach_margin = np.zeros(6)
         self.refinement: Refinement | None = None
         self.refined_sites: list[int] = []
         #: the arrival direction of every intermediate point (refinement order), if followed
