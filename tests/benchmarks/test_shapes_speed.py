@@ -1,0 +1,141 @@
+"""Benchmark matrix: parse and rewrite speed on every program shape (issue 18).
+
+Run (about 200,000 lines per shape; RAPIDFIX_BENCH_LINES scales it down):
+
+    OMP_NUM_THREADS=1 pytest tests/benchmarks/test_shapes_speed.py -n 0 -s
+
+For each shape of tests/benchmarks/program_shapes.py, in one process:
+
+- parse: plain Lark LALR building a parse tree from grammars/rapid.lark (the
+  baseline) and `parse_program` (syntax tree and the full program model), lines
+  per second of CPU time and their ratio (targets: >= 60,000 lines/s and >= 8x);
+- rewrite: `rapidfix rewrite` as a fresh process (start-up and imports
+  included), lines per second of the child's CPU time and wall time (target:
+  >= 30,000 lines/s), plus the time per phase of `rewrite_file` in this process
+  (RAPIDFIX_PROFILE_PHASES);
+- start-up: `rapidfix --help` and `rapidfix check` of a small file (target < 0.3 s).
+
+Only correctness is asserted, never time.
+"""
+
+from __future__ import annotations
+
+import gc
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from lark import Lark
+
+sys.path.insert(0, str(Path(__file__).parent))
+from program_shapes import SHAPES, shape_program
+
+from rapidfix import pipeline
+from rapidfix.errors.model_file import save_model
+from rapidfix.rapid import parse_program
+from rapidfix.rapid.grammar import grammar_text
+from rapidfix.rapid.source import decode_source
+from rapidfix.sim import simulate_cell
+
+LINES = int(os.environ.get("RAPIDFIX_BENCH_LINES", "200000"))
+ONLY = [s for s in os.environ.get("RAPIDFIX_BENCH_SHAPES", "").split(",") if s] or list(SHAPES)
+
+
+def _cpu(fn, *args):
+    gc.collect()
+    c = time.process_time()
+    result = fn(*args)
+    return result, time.process_time() - c
+
+
+def _suffix(shape: str) -> str:
+    return ".prg" if shape == "prg" else ".mod"
+
+
+def test_parse_matrix():
+    plain = Lark(grammar_text(), parser="lalr", lexer="contextual", cache=True)
+    parse_program("MODULE M\nENDMODULE\n")
+    rows = []
+    for shape in ONLY:
+        data = shape_program(shape, LINES).encode()
+        lines = data.count(b"\n")
+        text = decode_source(data, "x").text
+        tree, base = _cpu(plain.parse, text)
+        del tree
+        best = None
+        for _ in range(2):
+            program, ours = _cpu(parse_program, data, f"x{_suffix(shape)}")
+            assert program.motions
+            assert program.to_bytes() == data
+            del program
+            best = ours if best is None else min(best, ours)
+        rows.append((shape, lines, lines / base, lines / best, base / best))
+    print(f"\nparse + model, lines/s of CPU time, {LINES:,} lines per shape")
+    print(f"{'shape':10s} {'lines':>8s} {'plain Lark':>11s} {'parse_program':>14s} {'ratio':>6s}")
+    for shape, lines, base, ours, ratio in rows:
+        print(f"{shape:10s} {lines:8,d} {base:11,.0f} {ours:14,.0f} {ratio:5.1f}x")
+    print(f"slowest: {min(r[3] for r in rows):,.0f} lines/s, lowest ratio "
+          f"{min(r[4] for r in rows):.1f}x (targets 60,000 lines/s, 8x)")
+
+
+@pytest.fixture(scope="module")
+def model_path(tmp_path_factory):
+    root = tmp_path_factory.mktemp("bench_cell")
+    folder = simulate_cell(root / "cell", seed=5)
+    outcome = pipeline.fit_from_files(folder / "setup.toml", [folder / "sweeps.csv"])
+    return save_model(outcome.model, root / "model.json")
+
+
+def _run_cli(*args: str) -> tuple[float, float, subprocess.CompletedProcess]:
+    """(child CPU seconds, wall seconds, result) of `rapidfix ARGS` in a fresh process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "rapidfix.cli", *args],
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, wall, done
+
+
+def test_rewrite_matrix(model_path, tmp_path):
+    rows = []
+    for shape in ONLY:
+        source = tmp_path / f"{shape}{_suffix(shape)}"
+        source.write_bytes(shape_program(shape, LINES).encode())
+        lines = source.read_bytes().count(b"\n")
+        out = tmp_path / f"{shape}.out{_suffix(shape)}"
+        cpu, wall, done = _run_cli("rewrite", str(source), "--model", str(model_path),
+                                   "-o", str(out), "--force")
+        assert done.returncode in (0, 3), done.stderr
+        rows.append((shape, lines, lines / cpu, lines / wall, done.returncode))
+    print(f"\nrapidfix rewrite, whole process, {LINES:,} lines per shape")
+    print(f"{'shape':10s} {'lines':>8s} {'lines/s CPU':>12s} {'lines/s wall':>13s} exit")
+    for shape, lines, cpu, wall, code in rows:
+        print(f"{shape:10s} {lines:8,d} {cpu:12,.0f} {wall:13,.0f} {code:4d}")
+    print(f"slowest: {min(r[2] for r in rows):,.0f} lines/s CPU (target 30,000)")
+
+
+def test_small_program_and_start_up(model_path, tmp_path):
+    small = tmp_path / "small.mod"
+    small.write_bytes(shape_program("comments", 2000).encode())
+    tiny = tmp_path / "tiny.mod"
+    tiny.write_bytes(shape_program("named", 60).encode())
+    out = tmp_path / "small.out.mod"
+    figures = {}
+    for label, args in (
+        ("rapidfix --help", ("--help",)),
+        ("rapidfix check (60 lines)", ("check", str(tiny))),
+        ("rapidfix rewrite (2,000 lines)",
+         ("rewrite", str(small), "--model", str(model_path), "-o", str(out), "--force")),
+    ):
+        runs = [_run_cli(*args) for _ in range(3)]
+        assert all(r[2].returncode in (0, 3) for r in runs), runs[0][2].stderr
+        figures[label] = (min(r[0] for r in runs), min(r[1] for r in runs))
+    print()
+    for label, (cpu, wall) in figures.items():
+        print(f"{label:32s} {cpu:6.2f} s CPU {wall:6.2f} s wall (best of 3)")
