@@ -82,7 +82,9 @@ def _name(excluded: list[str]) -> str:
     if not excluded:
         return name
     by_letter: dict[str, list[str]] = {}
-    for word in sorted({w.upper() for w in excluded}, key=len, reverse=True):
+    # a fixed order (longest first, then alphabetical): the grammar text, and so the key
+    # of Lark's cached parse table, must not change with the hash seed of the process
+    for word in sorted({w.upper() for w in excluded}, key=lambda w: (-len(w), w)):
         by_letter.setdefault(word[0], []).append(re.escape(word[1:]))
     alternatives = "|".join(f"{first}(?:{'|'.join(rest)})" for first, rest in by_letter.items())
     return f"(?!(?i:{alternatives}){_WORD_END}){name}"
