@@ -31,6 +31,7 @@ positions do not depend on this module.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
 import sys
@@ -51,8 +52,11 @@ _WORD_END = r"(?![A-Za-z0-9_])"
 # number characters are taken whole (one step of the regex engine, not one per
 # character); as they hold no bracket, this never backtracks.
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
-# A value, for splitting a token whose syntax has been checked already.
-_VALUE_TEXT = r"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|[A-Za-z0-9_.+\-]+"
+# A value without a call, for splitting a token whose syntax has been checked already:
+# an aggregate, a negated number, a name or a number.
+_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{_WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
+# A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
+_VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{_WS}*\([^()]*\)|{_SIMPLE_TEXT}"
 
 
 class NotFast(Exception):
@@ -102,7 +106,15 @@ def _patterns() -> dict[str, str]:
     data_name = _name(_keywords_after("MODULE m\nVAR num "))
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
-    value = f"(?:{_LOOSE_AGGREGATE}|{number}|{value_name})"
+    # a value: an aggregate, a number, a negated number, a name, or a function call
+    # whose arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,
+    # 0,0,5 \\Rz:=90)`); one regex step per piece, and nothing to backtrack into
+    simple = f"(?:{_LOOSE_AGGREGATE}|{number}|-{_WS}*{number}|{value_name})"
+    inner_optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
+    inner = (rf"\({_WS}*(?:(?:{simple}|{inner_optional})(?:{_WS}*(?:,{_WS}*{simple}"
+             rf"|(?:,{_WS}*)?{inner_optional}))*{_WS}*)?\)")
+    value = (f"(?:{_LOOSE_AGGREGATE}|{number}|-{_WS}*{number}"
+             f"|{value_name}(?:{_WS}*{inner})?)")
     optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{value})?"
     argument = f"(?:{value}|{optional})"
     following = f"(?:,{_WS}*{value}|(?:,{_WS}*)?{optional})"
@@ -211,15 +223,70 @@ def aggregate_value(text: str) -> tuple:
     raise NotFast(text)
 
 
+# Splitting the inside of a checked function call: one piece is an optional
+# argument, a required value or the closing parenthesis.
+_INNER_PIECE = re.compile(
+    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_SIMPLE_TEXT}))?"
+    rf"|({_SIMPLE_TEXT})|(\)))"
+)
+_WS_CHARS = " \t\f\v\r\n\x1a"
+
+
+def _call_node(text: str, start: int) -> s.Call:
+    """The Call node of checked function call text `Name(args)` at `start`."""
+    open_at = text.index("(")
+    name = text[:open_at].rstrip(_WS_CHARS)
+    args: list[s.Argument] = []
+    for piece in _INNER_PIECE.finditer(text, open_at + 1):
+        slash, option, option_value, value, close = piece.groups()
+        if value is not None:
+            node = _value_node(value, start + piece.start(4))
+            args.append(s.Argument(node.start, node.end, "required", None, node))
+        elif slash is not None:
+            node = None if option_value is None else _value_node(option_value,
+                                                                 start + piece.start(3))
+            args.append(s.Argument(start + piece.start(1), start + piece.end(), "optional",
+                                   option, node))
+        elif close is not None:
+            break
+    return s.Call(start, start + len(text), sys.intern(name), args)
+
+
 def _value_node(text: str, start: int) -> s.Expr:
-    """The node the grammar builds for a name, number or numeric aggregate at `start`."""
+    """The node the grammar builds for a value the fast terminals take, at `start`: a
+    name, a number, a numeric aggregate, a negated number or a function call."""
     end = start + len(text)
     first = text[0]
     if first == "[":
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
         return s.Number(start, end, _number(text), text)
+    if first == "-":
+        rest = text[1:].lstrip(_WS_CHARS)
+        operand = _value_node(rest, end - len(rest))
+        return s.Unary(start, operand.end, "-", operand)
+    if text[-1] == ")":
+        return _call_node(text, start)
     return s.NameRef(start, end, sys.intern(text))
+
+
+def _moved(node: Any, shift: int) -> Any:
+    """A copy of an expression or argument node with its offsets moved by `shift`."""
+    if isinstance(node, s.Argument):
+        return s.Argument(node.start + shift, node.end + shift, node.kind, node.name,
+                          None if node.value is None else _moved(node.value, shift))
+    if isinstance(node, s.Unary):
+        return s.Unary(node.start + shift, node.end + shift, node.op,
+                       _moved(node.operand, shift))
+    if isinstance(node, s.Call):
+        return s.Call(node.start + shift, node.end + shift, node.name,
+                      [_moved(a, shift) for a in node.args])
+    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
+
+
+def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
+    """A nested node (negation, call) of a tail, moved to stand at `start`."""
+    return _moved(template, start - template.start)
 
 
 # A call's name and its first argument when that is a value after whitespace (a
@@ -241,7 +308,9 @@ def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
         return s.Number, start, node.end, (node.value, node.text)
     if isinstance(node, s.NumericAggregate):
         return s.NumericAggregate, start, node.end, (node.value,)
-    return s.NameRef, start, node.end, (node.name,)
+    if isinstance(node, s.NameRef):
+        return s.NameRef, start, node.end, (node.name,)
+    return _nested, start, node.end, (node,)
 
 
 def _tail(text: str) -> tuple[_TailArgument, ...]:
@@ -308,7 +377,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
             head_arg = None
         else:
             at = base + m.start(2)
-            if first[0].isalpha():
+            if first[0].isalpha() and first[-1] != ")":
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)

@@ -120,6 +120,65 @@ def test_rewrite_matrix(model_path, tmp_path):
     print(f"slowest: {min(r[2] for r in rows):,.0f} lines/s CPU (target 30,000)")
 
 
+_PHASES = (  # (label, module attribute path) of rewrite_source's steps, in order
+    ("parse + model", "rapidfix.postprocess.rewrite", "parse_program"),
+    ("plan (IK, compensation)", "rapidfix.postprocess.rewrite._Rewriter", "plan"),
+    ("path check", "rapidfix.postprocess.rewrite._Rewriter", "paths"),
+    ("emit (edits)", "rapidfix.postprocess.rewrite._Rewriter", "emit"),
+    ("run statement", "rapidfix.postprocess.rewrite", "_run_statement"),
+    ("read back", "rapidfix.postprocess.rewrite", "read_back"),
+    ("predicted deviation", "rapidfix.postprocess.rewrite", "predicted_deviation"),
+    ("atomic write", "rapidfix.postprocess.rewrite", "write_bytes_atomic"),
+)
+
+
+def test_rewrite_phases(model_path, tmp_path, monkeypatch):
+    """CPU seconds of each step of `rewrite_file` in this (warm) process, per shape."""
+    import importlib
+
+    from rapidfix.postprocess.compensator import Compensator
+    from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
+
+    spent: dict[str, float] = {}
+
+    def timed(label, fn):
+        def wrapper(*args, **kwargs):
+            c = time.process_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent[label] = spent.get(label, 0.0) + time.process_time() - c
+        return wrapper
+
+    for label, where, name in _PHASES:
+        module_name, _, owner = where.partition("._")
+        target = importlib.import_module(module_name)
+        if owner:
+            target = getattr(target, "_" + owner)
+        monkeypatch.setattr(target, name, timed(label, getattr(target, name)))
+    c = time.process_time()
+    comp = Compensator.load(model_path)
+    load = time.process_time() - c
+    warm = tmp_path / "warm.mod"  # first-call costs (compiled kernels, caches) apart
+    warm.write_bytes(shape_program("named", 200).encode())
+    rewrite_file(warm, tmp_path / "warm.out.mod", comp, RewriteOptions(force=True))
+    print(f"\nrewrite_file per phase, CPU s, {LINES:,} lines per shape "
+          f"(Compensator.load once: {load:.2f} s)")
+    labels = [p[0] for p in _PHASES]
+    print(f"{'shape':10s} " + " ".join(f"{lab[:11]:>11s}" for lab in labels)
+          + f" {'other':>7s} {'total':>7s}")
+    for shape in ONLY:
+        source = tmp_path / f"{shape}{_suffix(shape)}"
+        source.write_bytes(shape_program(shape, LINES).encode())
+        spent.clear()
+        c = time.process_time()
+        rewrite_file(source, tmp_path / f"out{_suffix(shape)}", comp, RewriteOptions(force=True))
+        total = time.process_time() - c
+        other = total - sum(spent.values())
+        print(f"{shape:10s} " + " ".join(f"{spent.get(lab, 0.0):11.2f}" for lab in labels)
+              + f" {other:7.2f} {total:7.2f}")
+
+
 def test_small_program_and_start_up(model_path, tmp_path):
     small = tmp_path / "small.mod"
     small.write_bytes(shape_program("comments", 2000).encode())
