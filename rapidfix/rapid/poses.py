@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from rapidfix.rapid.values import Value, to_robtarget
+from rapidfix.rapid.values import Value, fits_type, to_robtarget
 
 Quat = tuple[float, float, float, float]
 
@@ -60,23 +60,34 @@ def _rotate(q: Quat, v: tuple[float, float, float]) -> tuple[float, float, float
             vz + w * tz + (x * ty - y * tx))
 
 
+def _parts(target: Value) -> tuple[tuple, tuple, tuple, tuple]:
+    """(trans, rot, confdata as whole floats, extax) of a robtarget value; raises
+    ValueShapeError. A value of the right shape with whole confdata is taken as it
+    is (robtargets read from a program usually are)."""
+    if fits_type("robtarget", target) and all(c.is_integer() for c in target[2]):
+        trans, rot, conf, extax = target
+        return trans, rot, conf, extax
+    rt = to_robtarget(target)
+    return rt.trans, rt.rot, tuple(float(c) for c in rt.robconf), rt.extax
+
+
 def offs(target: Value, dx: float, dy: float, dz: float) -> Value:
     """Offs(p, dx, dy, dz): the robtarget value moved by (dx, dy, dz) mm."""
-    rt = to_robtarget(target)
-    trans = (rt.trans[0] + dx, rt.trans[1] + dy, rt.trans[2] + dz)
-    return (trans, rt.rot, tuple(float(c) for c in rt.robconf), rt.extax)
+    trans, rot, conf, extax = _parts(target)
+    return ((trans[0] + dx, trans[1] + dy, trans[2] + dz), rot, conf, extax)
 
 
 def reltool(target: Value, dx: float, dy: float, dz: float,
             rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> Value:
     """RelTool(p, dx, dy, dz \\Rx \\Ry \\Rz): displaced and rotated in the tool frame (deg)."""
-    rt = to_robtarget(target)
-    rot = _unit(tuple(float(v) for v in rt.rot))
-    shift = _rotate(rot, (dx, dy, dz))
-    moved = tuple(float(p + d) for p, d in zip(rt.trans, shift))
+    trans, rot, conf, extax = _parts(target)
+    unit = _unit(rot)
+    shift = _rotate(unit, (dx, dy, dz))
+    moved = (trans[0] + shift[0], trans[1] + shift[1], trans[2] + shift[2])
+    if rx == ry == rz == 0.0:
+        return (moved, _positive(unit), conf, extax)
     turn = _mul(_mul(_about(1, rx), _about(2, ry)), _about(3, rz))
-    turned = _positive(_unit(_mul(rot, turn)))
-    return (moved, turned, tuple(float(c) for c in rt.robconf), rt.extax)
+    return (moved, _positive(_unit(_mul(unit, turn))), conf, extax)
 
 
 def orient_zyx(ez: float, ey: float, ex: float) -> Quat:
