@@ -14,10 +14,12 @@ grammar, each matching a whole run of such statements at once:
 a value being a name, an unsigned number or an all-numeric aggregate of up to
 two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
-offsets and values), so nothing downstream can tell the difference. Anything
-else in a statement — a comment, an expression, a keyword, a string, a named or
-conditional argument — ends the run, and that statement is parsed by the full
-grammar as before.
+offsets and values), so nothing downstream can tell the difference. Values may
+also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
+and whole-line comments may stand between the statements of a run. Anything
+else in a statement — a comment inside it, an expression, a keyword, a string, a
+named or conditional argument, a call inside a call — ends the run, and that
+statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -46,6 +48,10 @@ from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_v
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
 _WS = r"[ \t\f\v\r\n\x1a]"
+# What may stand between two statements of a run: whitespace and whole-line comments
+# (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
+# cut short on backtracking, so nothing inside it is ever read as a statement).
+_GAP = rf"{_WS}*(?:![^\n]*\n{_WS}*)*"
 _WORD_END = r"(?![A-Za-z0-9_])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
 # for speed; its numbers are checked when they are read (_number_group). Runs of
@@ -142,8 +148,8 @@ def grammar_extension(grammar: str) -> str:
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
     more = f"{{0,{RUN_LIMIT - 1}}}"
-    calls = f"{p['call']}(?:{_WS}*{p['call']}){more}"
-    decls = f"{p['decl']}(?:{_WS}*{p['decl']}){more}"
+    calls = f"{p['call']}(?:{_GAP}{p['call']}){more}"
+    decls = f"{p['decl']}(?:{_GAP}{p['decl']}){more}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (
@@ -172,7 +178,7 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         return f"({pattern})" if modifiers else pattern
 
     return re.compile(
-        rf"{_WS}*(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
+        rf"{_GAP}(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{_WS}+"
         rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
         rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
@@ -291,7 +297,7 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
+_CALL_HEAD = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
 # Distinct argument tails kept (a CAM program has a few dozen).
 _TAIL_LIMIT = 4096
 

@@ -93,6 +93,12 @@ FAST = {
         "Foo -1, - 2.5 \\A:=-3, Abs(-1), f(), g(\\B), h(a \\B:=1, c);",
         "Foo\n  Offs(\r\n p1,\t0,0,\n1), v100;",
     ),
+    "comments between statements": module(
+        "! head", "CONST num a:=1; ! a", "! MoveL p1; CONST num b:=2;", "CONST num c:=3;",
+        "PROC main()", "  MoveL p1,v100,z1,tool0; ! to p1", "  ! MoveL p2,v1,z1,t; ;;",
+        "", "  !", "  MoveL p2,v100,z1,tool0;\r", "  ! crlf\r", "  Stop; !", "ENDPROC",
+        "! last, without a newline after ENDMODULE",
+    ),
     "keywords as plain names": routine("MoveL Step, v100, z1, tool0 \\WObj:=Default;"),
     "module data": module(
         "CONST robtarget p1:=" + TARGET + ";",
@@ -196,6 +202,18 @@ def test_function_calls_and_negated_numbers_are_read_in_runs():
     assert body and all(isinstance(item, Run) for item in body)
 
 
+def test_comments_between_statements_stay_in_one_run():
+    from rapidfix.rapid.bulk import Run, read_bulk, run_parser
+
+    text = FAST["comments between statements"]
+    module = run_parser().parse(text).modules[0]
+    assert [type(item).__name__ for item in module.items] == ["Run", "Routine"]
+    assert len(module.items[1].body) == 1 and isinstance(module.items[1].body[0], Run)
+    bulk = read_bulk(text)
+    assert [c[0] for c in bulk.calls] == ["MoveL", "MoveL", "Stop"]
+    assert sorted(bulk.data[("m", None)]) == ["a", "c"]
+
+
 @pytest.mark.parametrize("name", sorted(MIXED))
 def test_other_statements_parse_to_the_same_tree(name):
     text = MIXED[name]
@@ -287,6 +305,8 @@ PIECES = [
     "Foo f(), g(a \\B, [1,2]);",
     "Foo f(g(1));",
     "Foo f(1)+1;",
+    "! MoveL p1,v1,z1,t;\n",
+    "Foo; ! x;\nBar;",
     "Foo ;;",
     "Bar",
 ]
