@@ -36,8 +36,8 @@ from rapidfix.rapid.fastpath import (
     _WS,
     FastSyntaxBuilder,
     NotFast,
+    cached_extension,
     declaration_pattern,
-    grammar_extension,
 )
 from rapidfix.rapid.grammar import grammar_text
 
@@ -67,7 +67,7 @@ class _RunBuilder(FastSyntaxBuilder):
 def run_parser() -> Lark:
     """The fast parser (grammar and fast terminals), building `Run` nodes for runs."""
     grammar = grammar_text()
-    return Lark(grammar + grammar_extension(grammar), parser="lalr", lexer="contextual",
+    return Lark(grammar + cached_extension(grammar), parser="lalr", lexer="contextual",
                 transformer=_RunBuilder(), cache=True)
 
 

@@ -112,19 +112,21 @@ def _patterns() -> dict[str, str]:
     data_name = _name(_keywords_after("MODULE m\nVAR num "))
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
-    # a value: an aggregate, a number, a negated number, a name, or a function call
-    # whose arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,
-    # 0,0,5 \\Rz:=90)`); one regex step per piece, and nothing to backtrack into
-    simple = f"(?:{_LOOSE_AGGREGATE}|{number}|-{_WS}*{number}|{value_name})"
-    inner_optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
-    inner = (rf"\({_WS}*(?:(?:{simple}|{inner_optional})(?:{_WS}*(?:,{_WS}*{simple}"
-             rf"|(?:,{_WS}*)?{inner_optional}))*{_WS}*)?\)")
-    value = (f"(?:{_LOOSE_AGGREGATE}|{number}|-{_WS}*{number}"
-             f"|{value_name}(?:{_WS}*{inner})?)")
-    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{value})?"
+    # a value: an aggregate, a (negated) number, a name, or a function call whose
+    # arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5
+    # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
+    # written once where it can be: the contextual lexer compiles these patterns into
+    # each of its scanners, at a cost that grows with their length.
+    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name})"
+    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
+    plain_argument = f"(?:{simple}|{optional})"
+    # a further argument: after a comma, or an optional one right after the last
+    following = rf"(?:,{_WS}*|(?=\\))"
+    inner = (rf"\({_WS}*(?:{plain_argument}(?:{_WS}*{following}{plain_argument})*{_WS}*)?"
+             rf"\)")
+    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name}(?:{_WS}*{inner})?)"
     argument = f"(?:{value}|{optional})"
-    following = f"(?:,{_WS}*{value}|(?:,{_WS}*)?{optional})"
-    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following})*)?{_WS}*;"
+    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following}{argument})*)?{_WS}*;"
     decl = (f"(?i:(?:LOCAL{_WS}+)?(?:TASK{_WS}+)?(?:VAR|PERS|CONST)){_WS}+{type_name}{_WS}+"
             f"{data_name}{_WS}*(?::={_WS}*{value}{_WS}*)?;")
     return {"call": call, "decl": decl}
@@ -147,9 +149,9 @@ def grammar_extension(grammar: str) -> str:
     if _BODY_RULE not in grammar:  # pragma: no cover - guards a change of rapid.lark
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
-    more = f"{{0,{RUN_LIMIT - 1}}}"
-    calls = f"{p['call']}(?:{_GAP}{p['call']}){more}"
-    decls = f"{p['decl']}(?:{_GAP}{p['decl']}){more}"
+    # a run starts with a statement (the gap before the first matches nothing)
+    calls = f"(?=[A-Za-z])(?:{_GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    decls = f"(?=[A-Za-z])(?:{_GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (
@@ -466,12 +468,44 @@ class FastSyntaxBuilder(SyntaxBuilder):
         return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
 
 
+def cached_extension(grammar: str) -> str:
+    """grammar_extension(grammar), kept in the temporary folder beside Lark's own cache.
+
+    Working it out needs the plain parser's tables and an interactive parse (about
+    0.06 s); a command that checks one small file would spend a fifth of its time on
+    it. The key covers the grammar, this module's source and Lark's version.
+    """
+    import hashlib
+    import os
+    import tempfile
+    from pathlib import Path
+
+    import lark
+
+    source = Path(__file__).read_bytes()
+    key = hashlib.sha256(grammar.encode() + source + lark.__version__.encode()).hexdigest()
+    user = getattr(os, "getuid", lambda: "user")()
+    path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        pass
+    extension = grammar_extension(grammar)
+    try:
+        scratch = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        scratch.write_text(extension, encoding="utf-8")
+        os.replace(scratch, path)
+    except OSError:  # pragma: no cover - a read-only temporary folder: work it out each time
+        pass
+    return extension
+
+
 @functools.lru_cache(maxsize=1)
 def fast_parser() -> Lark:
     """The grammar's LALR parser with the fast terminals, building syntax nodes directly."""
     grammar = grammar_text()
     return Lark(
-        grammar + grammar_extension(grammar),
+        grammar + cached_extension(grammar),
         parser="lalr",
         lexer="contextual",
         transformer=FastSyntaxBuilder(),

@@ -179,6 +179,35 @@ def test_rewrite_phases(model_path, tmp_path, monkeypatch):
               + f" {other:7.2f} {total:7.2f}")
 
 
+def test_batch_of_mixed_shapes(model_path, tmp_path):
+    """A folder of 200 programs of every shape (about 1,000 lines each), on 1 core and on all."""
+    import shutil
+
+    from rapidfix.postprocess.batch import BatchSettings, run_batch
+    from rapidfix.postprocess.rewrite import RewriteOptions
+
+    n_files = int(os.environ.get("RAPIDFIX_BENCH_FILES", "200"))
+    src = tmp_path / "in"
+    for i in range(n_files):
+        shape = SHAPES[i % len(SHAPES)]
+        folder = src / f"cell{i % 10}"
+        folder.mkdir(parents=True, exist_ok=True)
+        text = shape_program(shape, 1000)
+        (folder / f"part{i}{_suffix(shape)}").write_bytes(text.encode())
+    settings = BatchSettings(str(model_path), None, None, (), RewriteOptions(force=True))
+    cores = os.cpu_count() or 1
+    timings = {}
+    for workers in (1, cores):
+        out = tmp_path / f"out{workers}"
+        t0 = time.perf_counter()
+        summary = run_batch(src, out, settings, workers=workers, progress=False)
+        timings[workers] = time.perf_counter() - t0
+        assert summary.count("ok") == n_files
+        shutil.rmtree(out)
+    print(f"\nbatch of {n_files} mixed programs (~1,000 lines each): 1 core {timings[1]:.1f} s, "
+          f"{cores} cores {timings[cores]:.1f} s, speed-up {timings[1] / timings[cores]:.2f}x")
+
+
 def test_small_program_and_start_up(model_path, tmp_path):
     small = tmp_path / "small.mod"
     small.write_bytes(shape_program("comments", 2000).encode())
