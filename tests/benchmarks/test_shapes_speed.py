@@ -208,6 +208,40 @@ def test_batch_of_mixed_shapes(model_path, tmp_path):
           f"{cores} cores {timings[cores]:.1f} s, speed-up {timings[1] / timings[cores]:.2f}x")
 
 
+_PEAK = (
+    "import json, sys\n"
+    "def peak_kb():\n"
+    "    with open('/proc/self/status') as status:\n"
+    "        return int(next(l for l in status if l.startswith('VmHWM')).split()[1])\n"
+    "from rapidfix.cli import main\n"
+    "code = main(sys.argv[1:])\n"
+    "print(json.dumps({'peak_kb': peak_kb(), 'code': code}))\n"
+)
+
+
+def test_memory_of_a_million_lines(model_path, tmp_path):
+    """Peak resident size of `rapidfix check` and `rapidfix rewrite` on ~1,000,000 lines."""
+    import json
+
+    lines = int(os.environ.get("RAPIDFIX_BENCH_MEMORY_LINES", "1000000"))
+    shape = os.environ.get("RAPIDFIX_BENCH_MEMORY_SHAPE", "comments")
+    source = tmp_path / f"big{_suffix(shape)}"
+    source.write_bytes(shape_program(shape, lines).encode())
+    n = source.read_bytes().count(b"\n")
+    print()
+    for label, args in (("check", ("check", "-q", str(source))),
+                        ("rewrite", ("rewrite", str(source), "--model", str(model_path),
+                                     "-o", str(tmp_path / "big.out.mod"), "--force"))):
+        t0 = time.perf_counter()
+        done = subprocess.run([sys.executable, "-c", _PEAK, *args], capture_output=True,
+                              text=True)
+        wall = time.perf_counter() - t0
+        result = json.loads(done.stdout.strip().splitlines()[-1])
+        assert result["code"] in (0, 3), done.stderr
+        print(f"{label:8s} {n:,} lines ({shape}): peak {result['peak_kb'] / 1024:,.0f} MB, "
+              f"{wall:.1f} s wall (target < 1 GB)")
+
+
 def test_small_program_and_start_up(model_path, tmp_path):
     small = tmp_path / "small.mod"
     small.write_bytes(shape_program("comments", 2000).encode())
