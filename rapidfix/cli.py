@@ -19,7 +19,6 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from rapidfix import __version__
 from rapidfix.exceptions import RapidfixError, UsageError
 
 EXIT_OK = 0
@@ -29,21 +28,26 @@ EXIT_WARNINGS = 3
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
 
-# Subcommand modules under rapidfix.commands, in the order `--help` lists them.
-COMMANDS: tuple[str, ...] = (
-    "demo",
-    "check",
-    "targets",
-    "plan",
-    "simulate",
-    "import_tracker",
-    "iso9283",
-    "fit",
-    "diagnose",
-    "rewrite",
-    "batch",
-    "upload",
-)
+# Subcommand modules under rapidfix.commands, in the order `--help` lists them: the
+# word that runs each and the line `rapidfix --help` shows for it, the same as the
+# module's own register() gives (tests/cli/test_start_up.py checks they agree). Only
+# the module of the command being run is imported: `rapidfix --help` and a light
+# command do not pay for the imports of the heavy ones.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("demo", "run the whole loop on a built-in virtual robot"),
+    "check": ("check", "parse RAPID programs and report syntax errors"),
+    "targets": ("targets", "list the targets of a RAPID program (CSV or JSON)"),
+    "plan": ("plan", "write the RAPID measurement program and pose table of a tracker campaign"),
+    "simulate": ("simulate", "make a measurement set from a virtual robot with known errors"),
+    "import_tracker": ("import", "turn a laser tracker's export into the measurement files"),
+    "iso9283": ("iso9283",
+                "pose and distance accuracy/repeatability (ISO 9283) of a measured cube run"),
+    "fit": ("fit", "fit a joint motion error model from joint sweeps"),
+    "diagnose": ("diagnose", "trace the residual error to a missing physical effect and add it"),
+    "rewrite": ("rewrite", "write a compensated copy of a RAPID program"),
+    "batch": ("batch", "compensate every RAPID program in a folder tree"),
+    "upload": ("upload", "send a program to the controller over a serial link"),
+}
 
 EXIT_STATUS_EPILOG = ("exit status: 0 success, 1 failure, 2 wrong usage, "
                       "3 finished with warnings (printed as 'rapidfix: warning: …')")
@@ -53,22 +57,49 @@ class Terminated(BaseException):
     """Raised in the main thread on SIGTERM, so the command unwinds like on Ctrl-C."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with every registered subcommand."""
+class _VersionAction(argparse.Action):
+    """`--version`, reading the installed version only when asked."""
+
+    def __init__(self, option_strings: list[str], dest: str = argparse.SUPPRESS,
+                 default: str = argparse.SUPPRESS, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        from rapidfix import __version__
+
+        print(f"rapidfix {__version__}")
+        parser.exit()
+
+
+def _command_in(argv: Sequence[str] | None) -> str | None:
+    """The module of the command `argv` runs (its first word that is not an option)."""
+    word = next((a for a in argv or () if not a.startswith("-")), None)
+    return next((module for module, (name, _) in COMMANDS.items() if name == word), None)
+
+
+def build_parser(argv: Sequence[str] | None = None, every: bool = False
+                 ) -> argparse.ArgumentParser:
+    """The top-level parser. The command `argv` runs (or, with `every`, each command) is
+    registered by its module; the others are only listed, with their one-line help."""
     parser = argparse.ArgumentParser(
         prog="rapidfix",
         description="Accurate ABB robots without touching the controller.",
         epilog=EXIT_STATUS_EPILOG,
     )
-    parser.add_argument("--version", action="version", version=f"rapidfix {__version__}")
+    parser.add_argument("--version", action=_VersionAction,
+                        help="show program's version number and exit")
     parser.add_argument(
         "--debug", action="store_true", help="show the full traceback of an error"
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name in COMMANDS:
-        module = importlib.import_module(f"rapidfix.commands.{name}")
-        module.register(sub)
+    chosen = _command_in(argv)
+    for module, (name, summary) in COMMANDS.items():
+        if every or module == chosen:
+            importlib.import_module(f"rapidfix.commands.{module}").register(sub)
+        else:
+            sub.add_parser(name, help=summary, add_help=False)
     return parser
 
 
@@ -114,7 +145,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError:  # not the main thread (e.g. called from a test's thread)
         previous = None
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(argv).parse_args(argv)
         with user_warnings(args.debug) as printed:
             status = int(args.func(args) or 0)
         return EXIT_WARNINGS if status == EXIT_OK and printed else status

@@ -867,7 +867,7 @@ def _identifier_counts(text: str) -> dict[str, int]:
     import re
     from collections import Counter
 
-    return Counter(w.lower() for w in re.findall(r"[A-Za-z][A-Za-z0-9_]*", text))
+    return Counter(map(str.lower, re.findall(r"[A-Za-z][A-Za-z0-9_]*", text)))
 
 
 def _strip_old_header(editor: Editor, text: str) -> None:

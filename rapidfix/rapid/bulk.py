@@ -31,12 +31,13 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     _CALL_PIECE,
+    _GAP,
     _VALUE_TEXT,
     _WS,
     FastSyntaxBuilder,
     NotFast,
+    cached_extension,
     declaration_pattern,
-    grammar_extension,
 )
 from rapidfix.rapid.grammar import grammar_text
 
@@ -66,7 +67,7 @@ class _RunBuilder(FastSyntaxBuilder):
 def run_parser() -> Lark:
     """The fast parser (grammar and fast terminals), building `Run` nodes for runs."""
     grammar = grammar_text()
-    return Lark(grammar + grammar_extension(grammar), parser="lalr", lexer="contextual",
+    return Lark(grammar + cached_extension(grammar), parser="lalr", lexer="contextual",
                 transformer=_RunBuilder(), cache=True)
 
 
@@ -75,7 +76,7 @@ def run_parser() -> Lark:
 _BULK_DECL = declaration_pattern(False)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
-_BULK_CALL = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
+_BULK_CALL = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
 _TAIL_LIMIT = 4096
 _EMPTY: dict[str, tuple[str, str]] = {}
 
@@ -169,17 +170,21 @@ class _Reader:
             decl.name.lower(), (decl.type_name.lower(), value))
         return True
 
-    def calls(self, run_text: str, module: str, routine: str) -> None:
+    def calls(self, run_text: str, module: str, routine: str) -> bool:
+        if "(" in run_text:  # a function call among the values (or in a comment): an
+            return False     # expression, which the bulk reader leaves to the full route
         calls = self.program.calls
         self.program.runs.append((len(calls), module, routine))
         calls.extend(_BULK_CALL.findall(run_text))
+        return True
 
     def body(self, items: list[Any], text: str, module: str, routine: str) -> bool:
         for item in items:
             kind = type(item)
             if kind is Run:
                 if item.kind == "calls":
-                    self.calls(item.text, module, routine)
+                    if not self.calls(item.text, module, routine):
+                        return False
                 else:
                     self.declarations(item.text, module, routine)
             elif kind is s.DataDecl:

@@ -11,11 +11,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from scipy.spatial.transform import Rotation
-
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.instructions import RUNTIME_FUNCTIONS
-from rapidfix.rapid.poses import offs, reltool
+from rapidfix.rapid.poses import offs, orient_zyx, reltool
 from rapidfix.rapid.values import RECORD_FIELDS, Value, ValueShapeError
 
 TypedValue = tuple[Value, "str | None"]
@@ -207,9 +205,7 @@ def _reltool(req: list[Value], opt: dict) -> TypedValue:
 
 def _orient_zyx(req: list[Value], opt: dict) -> TypedValue:
     ez, ey, ex = _nums(req, 3)
-    x, y, z, w = Rotation.from_euler("ZYX", [ez, ey, ex], degrees=True).as_quat()
-    q = (w, x, y, z) if w >= 0 else (-w, -x, -y, -z)
-    return tuple(float(v) for v in q), "orient"
+    return orient_zyx(ez, ey, ex), "orient"
 
 
 def _unary_math(fn: Callable[[float], float]) -> Callable[[list[Value], dict], TypedValue]:

@@ -14,10 +14,12 @@ grammar, each matching a whole run of such statements at once:
 a value being a name, an unsigned number or an all-numeric aggregate of up to
 two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
-offsets and values), so nothing downstream can tell the difference. Anything
-else in a statement — a comment, an expression, a keyword, a string, a named or
-conditional argument — ends the run, and that statement is parsed by the full
-grammar as before.
+offsets and values), so nothing downstream can tell the difference. Values may
+also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
+and whole-line comments may stand between the statements of a run. Anything
+else in a statement — a comment inside it, an expression, a keyword, a string, a
+named or conditional argument, a call inside a call — ends the run, and that
+statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -31,6 +33,7 @@ positions do not depend on this module.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import re
 import sys
@@ -45,14 +48,21 @@ from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_v
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
 _WS = r"[ \t\f\v\r\n\x1a]"
+# What may stand between two statements of a run: whitespace and whole-line comments
+# (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
+# cut short on backtracking, so nothing inside it is ever read as a statement).
+_GAP = rf"{_WS}*(?:![^\n]*\n{_WS}*)*"
 _WORD_END = r"(?![A-Za-z0-9_])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
 # for speed; its numbers are checked when they are read (_number_group). Runs of
 # number characters are taken whole (one step of the regex engine, not one per
 # character); as they hold no bracket, this never backtracks.
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
-# A value, for splitting a token whose syntax has been checked already.
-_VALUE_TEXT = r"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|[A-Za-z0-9_.+\-]+"
+# A value without a call, for splitting a token whose syntax has been checked already:
+# an aggregate, a negated number, a name or a number.
+_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{_WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
+# A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
+_VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{_WS}*\([^()]*\)|{_SIMPLE_TEXT}"
 
 
 class NotFast(Exception):
@@ -82,7 +92,9 @@ def _name(excluded: list[str]) -> str:
     if not excluded:
         return name
     by_letter: dict[str, list[str]] = {}
-    for word in sorted({w.upper() for w in excluded}, key=len, reverse=True):
+    # a fixed order (longest first, then alphabetical): the grammar text, and so the key
+    # of Lark's cached parse table, must not change with the hash seed of the process
+    for word in sorted({w.upper() for w in excluded}, key=lambda w: (-len(w), w)):
         by_letter.setdefault(word[0], []).append(re.escape(word[1:]))
     alternatives = "|".join(f"{first}(?:{'|'.join(rest)})" for first, rest in by_letter.items())
     return f"(?!(?i:{alternatives}){_WORD_END}){name}"
@@ -100,11 +112,21 @@ def _patterns() -> dict[str, str]:
     data_name = _name(_keywords_after("MODULE m\nVAR num "))
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
-    value = f"(?:{_LOOSE_AGGREGATE}|{number}|{value_name})"
-    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{value})?"
+    # a value: an aggregate, a (negated) number, a name, or a function call whose
+    # arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5
+    # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
+    # written once where it can be: the contextual lexer compiles these patterns into
+    # each of its scanners, at a cost that grows with their length.
+    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name})"
+    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
+    plain_argument = f"(?:{simple}|{optional})"
+    # a further argument: after a comma, or an optional one right after the last
+    following = rf"(?:,{_WS}*|(?=\\))"
+    inner = (rf"\({_WS}*(?:{plain_argument}(?:{_WS}*{following}{plain_argument})*{_WS}*)?"
+             rf"\)")
+    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name}(?:{_WS}*{inner})?)"
     argument = f"(?:{value}|{optional})"
-    following = f"(?:,{_WS}*{value}|(?:,{_WS}*)?{optional})"
-    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following})*)?{_WS}*;"
+    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following}{argument})*)?{_WS}*;"
     decl = (f"(?i:(?:LOCAL{_WS}+)?(?:TASK{_WS}+)?(?:VAR|PERS|CONST)){_WS}+{type_name}{_WS}+"
             f"{data_name}{_WS}*(?::={_WS}*{value}{_WS}*)?;")
     return {"call": call, "decl": decl}
@@ -127,9 +149,9 @@ def grammar_extension(grammar: str) -> str:
     if _BODY_RULE not in grammar:  # pragma: no cover - guards a change of rapid.lark
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
-    more = f"{{0,{RUN_LIMIT - 1}}}"
-    calls = f"{p['call']}(?:{_WS}*{p['call']}){more}"
-    decls = f"{p['decl']}(?:{_WS}*{p['decl']}){more}"
+    # a run starts with a statement (the gap before the first matches nothing)
+    calls = f"(?=[A-Za-z])(?:{_GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    decls = f"(?=[A-Za-z])(?:{_GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (
@@ -158,7 +180,7 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         return f"({pattern})" if modifiers else pattern
 
     return re.compile(
-        rf"{_WS}*(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
+        rf"{_GAP}(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{_WS}+"
         rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
         rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
@@ -209,20 +231,75 @@ def aggregate_value(text: str) -> tuple:
     raise NotFast(text)
 
 
+# Splitting the inside of a checked function call: one piece is an optional
+# argument, a required value or the closing parenthesis.
+_INNER_PIECE = re.compile(
+    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_SIMPLE_TEXT}))?"
+    rf"|({_SIMPLE_TEXT})|(\)))"
+)
+_WS_CHARS = " \t\f\v\r\n\x1a"
+
+
+def _call_node(text: str, start: int) -> s.Call:
+    """The Call node of checked function call text `Name(args)` at `start`."""
+    open_at = text.index("(")
+    name = text[:open_at].rstrip(_WS_CHARS)
+    args: list[s.Argument] = []
+    for piece in _INNER_PIECE.finditer(text, open_at + 1):
+        slash, option, option_value, value, close = piece.groups()
+        if value is not None:
+            node = _value_node(value, start + piece.start(4))
+            args.append(s.Argument(node.start, node.end, "required", None, node))
+        elif slash is not None:
+            node = None if option_value is None else _value_node(option_value,
+                                                                 start + piece.start(3))
+            args.append(s.Argument(start + piece.start(1), start + piece.end(), "optional",
+                                   option, node))
+        elif close is not None:
+            break
+    return s.Call(start, start + len(text), sys.intern(name), args)
+
+
 def _value_node(text: str, start: int) -> s.Expr:
-    """The node the grammar builds for a name, number or numeric aggregate at `start`."""
+    """The node the grammar builds for a value the fast terminals take, at `start`: a
+    name, a number, a numeric aggregate, a negated number or a function call."""
     end = start + len(text)
     first = text[0]
     if first == "[":
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
         return s.Number(start, end, _number(text), text)
+    if first == "-":
+        rest = text[1:].lstrip(_WS_CHARS)
+        operand = _value_node(rest, end - len(rest))
+        return s.Unary(start, operand.end, "-", operand)
+    if text[-1] == ")":
+        return _call_node(text, start)
     return s.NameRef(start, end, sys.intern(text))
+
+
+def _moved(node: Any, shift: int) -> Any:
+    """A copy of an expression or argument node with its offsets moved by `shift`."""
+    if isinstance(node, s.Argument):
+        return s.Argument(node.start + shift, node.end + shift, node.kind, node.name,
+                          None if node.value is None else _moved(node.value, shift))
+    if isinstance(node, s.Unary):
+        return s.Unary(node.start + shift, node.end + shift, node.op,
+                       _moved(node.operand, shift))
+    if isinstance(node, s.Call):
+        return s.Call(node.start + shift, node.end + shift, node.name,
+                      [_moved(a, shift) for a in node.args])
+    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
+
+
+def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
+    """A nested node (negation, call) of a tail, moved to stand at `start`."""
+    return _moved(template, start - template.start)
 
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = re.compile(rf"{_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
+_CALL_HEAD = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
 # Distinct argument tails kept (a CAM program has a few dozen).
 _TAIL_LIMIT = 4096
 
@@ -239,7 +316,9 @@ def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
         return s.Number, start, node.end, (node.value, node.text)
     if isinstance(node, s.NumericAggregate):
         return s.NumericAggregate, start, node.end, (node.value,)
-    return s.NameRef, start, node.end, (node.name,)
+    if isinstance(node, s.NameRef):
+        return s.NameRef, start, node.end, (node.name,)
+    return _nested, start, node.end, (node,)
 
 
 def _tail(text: str) -> tuple[_TailArgument, ...]:
@@ -306,7 +385,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
             head_arg = None
         else:
             at = base + m.start(2)
-            if first[0].isalpha():
+            if first[0].isalpha() and first[-1] != ")":
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
@@ -389,12 +468,44 @@ class FastSyntaxBuilder(SyntaxBuilder):
         return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
 
 
+def cached_extension(grammar: str) -> str:
+    """grammar_extension(grammar), kept in the temporary folder beside Lark's own cache.
+
+    Working it out needs the plain parser's tables and an interactive parse (about
+    0.06 s); a command that checks one small file would spend a fifth of its time on
+    it. The key covers the grammar, this module's source and Lark's version.
+    """
+    import hashlib
+    import os
+    import tempfile
+    from pathlib import Path
+
+    import lark
+
+    source = Path(__file__).read_bytes()
+    key = hashlib.sha256(grammar.encode() + source + lark.__version__.encode()).hexdigest()
+    user = getattr(os, "getuid", lambda: "user")()
+    path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        pass
+    extension = grammar_extension(grammar)
+    try:
+        scratch = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+        scratch.write_text(extension, encoding="utf-8")
+        os.replace(scratch, path)
+    except OSError:  # pragma: no cover - a read-only temporary folder: work it out each time
+        pass
+    return extension
+
+
 @functools.lru_cache(maxsize=1)
 def fast_parser() -> Lark:
     """The grammar's LALR parser with the fast terminals, building syntax nodes directly."""
     grammar = grammar_text()
     return Lark(
-        grammar + grammar_extension(grammar),
+        grammar + cached_extension(grammar),
         parser="lalr",
         lexer="contextual",
         transformer=FastSyntaxBuilder(),

@@ -386,7 +386,7 @@ class ModelBuilder:
         except RecursionError:
             return None, type_hint, False, "expression nested too deeply to evaluate"
         type_name = type_hint or kind
-        if type_name is not None and type_name != kind:
+        if type_name is not None and type_name != kind and not fits_type(type_name, value):
             try:
                 typed_value(type_name, value)
             except ValueShapeError as err:

@@ -1,47 +1,95 @@
-"""RAPID's target functions Offs and RelTool, evaluated on constant robtargets.
+"""RAPID's target functions Offs, RelTool and OrientZYX, evaluated on constant data.
 
 Offs moves the position in the frame the target is given in (the work object);
 RelTool moves and turns it in its own tool frame, the rotations done first
 about x, then about the new y, then about the new z (intrinsic X-Y'-Z'').
-Quaternions are [w, x, y, z] as in RAPID; the result has w >= 0.
+Quaternions are [w, x, y, z] as in RAPID; the results have w >= 0.
+
+Plain float arithmetic on one pose at a time: a program evaluates these once
+per call in its text, and importing a rotation library would cost the command
+line more start-up time than all the calls of a large program.
 """
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.spatial.transform import Rotation
+import math
 
-from rapidfix.rapid.values import Value, to_robtarget
+from rapidfix.rapid.values import Value, fits_type, to_robtarget
 
-
-def _rotation(q_wxyz: tuple[float, ...]) -> Rotation:
-    w, x, y, z = q_wxyz
-    return Rotation.from_quat([x, y, z, w])
+Quat = tuple[float, float, float, float]
 
 
-def _wxyz(rotation: Rotation) -> tuple[float, float, float, float]:
-    x, y, z, w = rotation.as_quat()
-    q = np.array([w, x, y, z])
-    if q[0] < 0:
-        q = -q
-    return tuple(float(v) for v in q)
+def _mul(a: Quat, b: Quat) -> Quat:
+    """Hamilton product a * b (rotation b first, then a)."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw)
+
+
+def _unit(q: tuple[float, ...]) -> Quat:
+    norm = math.sqrt(sum(v * v for v in q))
+    if norm == 0.0 or not math.isfinite(norm):
+        raise ValueError("the robtarget's orientation is not a quaternion (all zero)")
+    w, x, y, z = (v / norm for v in q)
+    return (w, x, y, z)
+
+
+def _positive(q: Quat) -> Quat:
+    w, x, y, z = q
+    return q if w >= 0 else (-w, -x, -y, -z)
+
+
+def _about(axis: int, degrees: float) -> Quat:
+    half = math.radians(degrees) / 2
+    q = [math.cos(half), 0.0, 0.0, 0.0]
+    q[axis] = math.sin(half)
+    return (q[0], q[1], q[2], q[3])
+
+
+def _rotate(q: Quat, v: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The vector v turned by the unit quaternion q."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    # t = 2 (q_vec x v); v' = v + w t + q_vec x t
+    tx, ty, tz = 2 * (y * vz - z * vy), 2 * (z * vx - x * vz), 2 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty),
+            vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))
+
+
+def _parts(target: Value) -> tuple[tuple, tuple, tuple, tuple]:
+    """(trans, rot, confdata as whole floats, extax) of a robtarget value; raises
+    ValueShapeError. A value of the right shape with whole confdata is taken as it
+    is (robtargets read from a program usually are)."""
+    if fits_type("robtarget", target) and all(c.is_integer() for c in target[2]):
+        trans, rot, conf, extax = target
+        return trans, rot, conf, extax
+    rt = to_robtarget(target)
+    return rt.trans, rt.rot, tuple(float(c) for c in rt.robconf), rt.extax
 
 
 def offs(target: Value, dx: float, dy: float, dz: float) -> Value:
     """Offs(p, dx, dy, dz): the robtarget value moved by (dx, dy, dz) mm."""
-    rt = to_robtarget(target)
-    trans = (rt.trans[0] + dx, rt.trans[1] + dy, rt.trans[2] + dz)
-    return (trans, rt.rot, tuple(float(c) for c in rt.robconf), rt.extax)
+    trans, rot, conf, extax = _parts(target)
+    return ((trans[0] + dx, trans[1] + dy, trans[2] + dz), rot, conf, extax)
 
 
 def reltool(target: Value, dx: float, dy: float, dz: float,
             rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> Value:
     """RelTool(p, dx, dy, dz \\Rx \\Ry \\Rz): displaced and rotated in the tool frame (deg)."""
-    rt = to_robtarget(target)
-    if np.linalg.norm(rt.rot) == 0.0:
-        raise ValueError("the robtarget's orientation is not a quaternion (all zero)")
-    rotation = _rotation(rt.rot)
-    moved = np.asarray(rt.trans) + rotation.apply([dx, dy, dz])
-    turned = rotation * Rotation.from_euler("XYZ", [rx, ry, rz], degrees=True)
-    trans = tuple(float(v) for v in moved)
-    return (trans, _wxyz(turned), tuple(float(c) for c in rt.robconf), rt.extax)
+    trans, rot, conf, extax = _parts(target)
+    unit = _unit(rot)
+    shift = _rotate(unit, (dx, dy, dz))
+    moved = (trans[0] + shift[0], trans[1] + shift[1], trans[2] + shift[2])
+    if rx == ry == rz == 0.0:
+        return (moved, _positive(unit), conf, extax)
+    turn = _mul(_mul(_about(1, rx), _about(2, ry)), _about(3, rz))
+    return (moved, _positive(_unit(_mul(unit, turn))), conf, extax)
+
+
+def orient_zyx(ez: float, ey: float, ex: float) -> Quat:
+    """OrientZYX(ez, ey, ex): turned about z, then the new y, then the new x (deg)."""
+    return _positive(_unit(_mul(_mul(_about(3, ez), _about(2, ey)), _about(1, ex))))

@@ -86,6 +86,19 @@ FAST = {
         "MoveL p1 , v100 , z1 , tool0 \\WObj := w , \\Conc ;",
         "Foo.5;WaitTime 1;Stop ;",
     ),
+    "function calls and negated numbers": routine(
+        "MoveL Offs(p1,0,0,-10),v100,z1,tool0\\WObj:=w;",
+        "MoveL RelTool( p1 , 0, -0.5, 5 \\Rz:=-90 \\Ry:=2.5), v100, z1, tool0;",
+        "MoveC Offs(p1,0,1,0), Offs (p2,[1,2],- 0x1F,.5e-3), v100, z1, tool0;",
+        "Foo -1, - 2.5 \\A:=-3, Abs(-1), f(), g(\\B), h(a \\B:=1, c);",
+        "Foo\n  Offs(\r\n p1,\t0,0,\n1), v100;",
+    ),
+    "comments between statements": module(
+        "! head", "CONST num a:=1; ! a", "! MoveL p1; CONST num b:=2;", "CONST num c:=3;",
+        "PROC main()", "  MoveL p1,v100,z1,tool0; ! to p1", "  ! MoveL p2,v1,z1,t; ;;",
+        "", "  !", "  MoveL p2,v100,z1,tool0;\r", "  ! crlf\r", "  Stop; !", "ENDPROC",
+        "! last, without a newline after ENDMODULE",
+    ),
     "keywords as plain names": routine("MoveL Step, v100, z1, tool0 \\WObj:=Default;"),
     "module data": module(
         "CONST robtarget p1:=" + TARGET + ";",
@@ -157,6 +170,11 @@ MIXED = {
     "other aggregates": routine(
         "Foo [ 1, 2 ];", "Foo [[[1]]];", "Foo [1,[2,3]];", "Foo [a, 1];", "Foo Offs(p1, 0, 0, 10);"
     ),
+    "calls the fast path leaves to the grammar": routine(
+        "Foo Offs(RelTool(p1,0,0,1),0,0,1);", "Foo f(1+2);", "Foo f(-a);", "Foo f(x:=1);",
+        "Foo f(\\A?B);", "Foo f(1) + 1;", "Foo -1 * 2;", "Foo f(\"s\");", "Foo --1;",
+        "Foo f(TRUE);", "Foo f(NOT a);", "Foo 1 -1;", "Foo f (1);",
+    ),
     "other data": module(
         "CONST num n := -1;",
         'CONST string s := "x";',
@@ -174,6 +192,26 @@ MIXED = {
 def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
     text = FAST[name]
     assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+def test_function_calls_and_negated_numbers_are_read_in_runs():
+    from rapidfix.rapid.bulk import Run, run_parser
+
+    tree = run_parser().parse(FAST["function calls and negated numbers"])
+    body = tree.modules[0].items[0].body
+    assert body and all(isinstance(item, Run) for item in body)
+
+
+def test_comments_between_statements_stay_in_one_run():
+    from rapidfix.rapid.bulk import Run, read_bulk, run_parser
+
+    text = FAST["comments between statements"]
+    module = run_parser().parse(text).modules[0]
+    assert [type(item).__name__ for item in module.items] == ["Run", "Routine"]
+    assert len(module.items[1].body) == 1 and isinstance(module.items[1].body[0], Run)
+    bulk = read_bulk(text)
+    assert [c[0] for c in bulk.calls] == ["MoveL", "MoveL", "Stop"]
+    assert sorted(bulk.data[("m", None)]) == ["a", "c"]
 
 
 @pytest.mark.parametrize("name", sorted(MIXED))
@@ -261,6 +299,14 @@ PIECES = [
     "Foo p1 v1;",
     "RETURN;",
     "Foo [[1,2],3];",
+    "MoveL Offs(p1,0,0,-10),v100,z1,tool0;",
+    "MoveL RelTool(p1, 0, 0, 5 \\Rz:=90), v100, z1, tool0 \\WObj:=w;",
+    "Foo -1, - 2.5 \\A:=Abs(-1);",
+    "Foo f(), g(a \\B, [1,2]);",
+    "Foo f(g(1));",
+    "Foo f(1)+1;",
+    "! MoveL p1,v1,z1,t;\n",
+    "Foo; ! x;\nBar;",
     "Foo ;;",
     "Bar",
 ]

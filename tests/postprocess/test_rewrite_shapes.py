@@ -1,0 +1,45 @@
+"""Every benchmark shape (tests/benchmarks/program_shapes.py), small: a rewrite through
+the fast route (fast terminals, bulk read-back) writes the same bytes as one through
+the plain grammar alone."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from program_shapes import SHAPES, shape_moves
+
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.rapid import bulk, parse
+from rapidfix.rapid.fastpath import NotFast
+from rapidfix.rapid.grammar import rapid_parser
+
+N_MOVES = 45
+
+
+class _Refuse:
+    """A run parser that never reads a program in bulk (the general read-back)."""
+
+    def parse(self, text: str):
+        raise NotFast(text[:10])
+
+
+def _plain_parse_text(text: str):
+    return rapid_parser().parse(text)
+
+
+@pytest.mark.parametrize("name", SHAPES)
+def test_every_shape_rewrites_as_through_the_plain_grammar(name, comp, monkeypatch):
+    data = shape_moves(name, N_MOVES).encode()
+    filename = "t.prg" if name == "prg" else "t.mod"
+    fast = rewrite_source(data, filename, comp, RewriteOptions())
+    with monkeypatch.context() as patch:
+        patch.setattr(parse, "parse_text", _plain_parse_text)
+        patch.setattr(bulk, "run_parser", _Refuse)
+        plain = rewrite_source(data, filename, comp, RewriteOptions())
+    assert fast.moves_compensated == plain.moves_compensated > 0
+    assert not fast.skipped
+    assert fast.data == plain.data

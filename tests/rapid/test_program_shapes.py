@@ -1,0 +1,38 @@
+"""Every benchmark shape (tests/benchmarks/program_shapes.py), small: the fast route
+builds the same syntax tree and the same model as the plain grammar."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from program_shapes import SHAPES, shape_moves
+from test_fastpath import shape
+from test_shared_operands import assert_same_model
+
+from rapidfix.rapid.fastpath import fast_parser
+from rapidfix.rapid.grammar import rapid_parser
+from rapidfix.rapid.source import decode_source
+
+N_MOVES = 45
+
+
+def _text(name: str) -> str:
+    return decode_source(shape_moves(name, N_MOVES).encode(), "t").text
+
+
+@pytest.mark.parametrize("name", SHAPES)
+def test_every_shape_parses_to_the_plain_tree(name):
+    text = _text(name)
+    assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
+
+
+@pytest.mark.parametrize("name", SHAPES)
+def test_every_shape_builds_the_plain_model(name):
+    program = assert_same_model(_text(name))
+    assert len(program.motions) >= N_MOVES * 2 // 3
+    assert all(m.target.static for m in program.motions)
