@@ -7,9 +7,10 @@ calibration set does not vary are not screened. Each is screened without
 refitting: its regressors times the sensitivity of the points to the error of the
 joint they act on, projected off everything the current model already fits, are
 regressed on the residual (linearised least squares). The score is the linear
-model's BIC gain, n ln(RSS / RSS') − k ln n. The best variant is then fitted and judged like any candidate, charged for the
-choice among all variants screened; the whole ranking goes into the report as
-what the residual correlates with, whether or not anything is accepted.
+model's BIC gain, n ln(RSS / RSS') − k ln n. The best variant is then fitted and
+judged like any candidate, charged for the choice among all variants screened;
+the whole ranking goes into the report as what the residual correlates with,
+whether or not anything is accepted.
 """
 
 from __future__ import annotations
