@@ -95,7 +95,7 @@ def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_
         before = np.linalg.norm(cols, axis=0)
         cols -= basis @ (basis.T @ cols)
         norms = np.linalg.norm(cols, axis=0)
-        fresh = norms > 1e-4 * before  # what the model fits already is not new
+        fresh = norms > 1e-2 * before  # what the model fits already is not new
         cols = cols[:, fresh] / norms[fresh]
         u, s, _ = np.linalg.svd(cols, full_matrices=False)
         keep = s > RCOND * (s[0] if s.size else np.inf)

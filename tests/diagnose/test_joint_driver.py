@@ -4,6 +4,7 @@ round trip; compensation by the general solve; the structured search on a known 
 import numpy as np
 import pytest
 
+from rapidfix.diagnose.features import exposing_feature
 from rapidfix.diagnose.structured import screen, variants
 from rapidfix.errors.candidates.gravity import body_torque_regressors, payload_torques
 from rapidfix.errors.candidates.joint_driver import DRIVERS, JointDriver
@@ -135,3 +136,15 @@ def test_the_screen_ranks_the_hidden_joint_and_driver_first():
     best = ranked[0].effect
     assert (best.joint, best.driver, best.source) == (2, "direction", 4)
     assert ranked[0].share > 0.9
+
+
+def test_the_report_shows_a_structured_effect_against_its_driver():
+    q = _poses(20, seed=7)
+    data = MeasuredPoints(q, np.zeros((20, 3)), _context(q), BALL)
+    shift = exposing_feature(JointDriver(2, "direction", source=4), data)
+    assert shift.discrete and "joint 5" in shift.label
+    np.testing.assert_array_equal(shift.values, data.ctx.direction(q)[:, 4])
+    warm = exposing_feature(JointDriver(1, "temperature", reference=24.0), data)
+    np.testing.assert_array_equal(warm.values, data.ctx.temp_c)
+    angle = exposing_feature(JointDriver(2, "angle", source=1), data)
+    np.testing.assert_allclose(angle.values, np.degrees(q[:, 1]))

@@ -10,7 +10,8 @@
   (`gravity`);
 - ``temperature`` / ``time``: a zero and a scale that drift with the arm's
   temperature (or, without one, the time since the start, as a warm-up):
-  (x − x_ref) and (x − x_ref) · θ_j;
+  (x − x_ref) and (x − x_ref) · θ_j, and the scale at x_ref, θ_j (the sweeps ran at
+  another temperature; the re-referenced first harmonic holds only part of a scale);
 - ``payload``: proportional to the payload mass, m − m_ref;
 - ``direction``: an offset per direction another joint (source) last moved, d_s = ±1;
 - ``angle``: first and second harmonics of another joint's (source) angle; the
@@ -47,9 +48,10 @@ DRIVERS: dict[str, tuple[tuple[str, ...], tuple[float, ...], frozenset[str]]] = 
     "gravity": (("k_rad_per_nm", "link_x_rad", "link_y_rad", "link_z_rad",
                  "flange_x_rad", "flange_y_rad", "flange_z_rad", "flange_mass_rad"),
                 (1e-7,) + (1e-6,) * 7, frozenset({"payload_kg", "payload_cog_mm"})),
-    "temperature": (("offset_rad_per_k", "scale_ppm_per_k"), (1e-6, 1.0),
+    "temperature": (("offset_rad_per_k", "scale_ppm_per_k", "scale_ppm"), (1e-6, 1.0, 1.0),
                     frozenset({"temp_c"})),
-    "time": (("offset_rad_per_h", "scale_ppm_per_h"), (1e-6, 1.0), frozenset({"time_s"})),
+    "time": (("offset_rad_per_h", "scale_ppm_per_h", "scale_ppm"), (1e-6, 1.0, 1.0),
+             frozenset({"time_s"})),
     "payload": (("offset_rad_per_kg",), (1e-7,), frozenset({"payload_kg"})),
     "direction": (("half_shift_rad",), (2e-6,), frozenset({"last_direction"})),
     "angle": (("sin1_rad", "cos1_rad", "sin2_rad", "cos2_rad", "source_sin2_rad",
@@ -129,7 +131,8 @@ class JointDriver(VectorEffect):
         if self.driver in ("temperature", "time"):
             unit = 1.0 if self.driver == "temperature" else 1.0 / 3600.0
             x = self._column(ctx.temp_c if self.driver == "temperature" else ctx.time_s, n, unit)
-            return np.column_stack([x, 1e-6 * x * q[:, self.joint]])
+            own = q[:, self.joint]
+            return np.column_stack([x, 1e-6 * x * own, 1e-6 * own])
         if self.driver == "payload":
             return self._column(None if ctx.payload_kg is None else self._payload(ctx, n),
                                 n)[:, None]
