@@ -148,3 +148,15 @@ def test_the_report_shows_a_structured_effect_against_its_driver():
     np.testing.assert_array_equal(warm.values, data.ctx.temp_c)
     angle = exposing_feature(JointDriver(2, "angle", source=1), data)
     np.testing.assert_allclose(angle.values, np.degrees(q[:, 1]))
+
+
+def test_a_gravity_effect_says_in_words_what_it_was_fitted_from():
+    eff = JointDriver(3, "gravity", robot=ROBOT.name)
+    eff.set_params(np.array([3.7e-5, 1e-4, 0, 0, 0, 0, 0, 0]))
+    eff.uncertainty = np.full(8, 4e-6)
+    assert eff.sentence() == ("joint 4's error grows with the gravity torque about joint 4 "
+                              "(payload and carried links): 0.00212 ± 0.00023°/N·m of "
+                              "payload torque")
+    eff.set_params(np.array([0.0, 1e-4, 0, 0, 0, 0, 0, 0]))
+    eff.uncertainty = np.zeros(8)
+    assert "payload did not vary" in eff.sentence()

@@ -195,6 +195,9 @@ class JointDriver(VectorEffect):
             return text if sd is None else f"{text} ± {format(conv(sd[i]), fmt)}"
 
         if self.driver == "gravity":
+            if p[0] == 0.0 and (sd is None or sd[0] == 0.0):  # the payload never varied
+                return (f"{self.what()}: from the carried tool and links' weight (the "
+                        "payload did not vary)")
             return f"{self.what()}: {pm(0, '.5f')}°/N·m of payload torque"
         if self.driver in ("temperature", "time"):
             per = "K" if self.driver == "temperature" else "h"
