@@ -13,10 +13,11 @@ import copy
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from rapidfix.diagnose.sensitivity import joint_derivatives
+from rapidfix.diagnose.structured import screen
 from rapidfix.errors.candidates.backlash import Backlash, last_motion_direction
 from rapidfix.errors.candidates.compliance import JointCompliance
 from rapidfix.errors.candidates.coupling import JointCoupling
@@ -25,7 +26,7 @@ from rapidfix.errors.candidates.registration import TrackerScale
 from rapidfix.errors.candidates.thermal import ThermalDrift
 from rapidfix.errors.candidates.tool_offset import ToolOffset
 from rapidfix.errors.effect import Effect
-from rapidfix.errors.fit_effects import MeasuredPoints, jacobian, predict
+from rapidfix.errors.fit_effects import MeasuredPoints, jacobian
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 from rapidfix.kinematics import RobotModel
@@ -108,21 +109,6 @@ def _registration(model: ErrorModel, s: Setting) -> Candidate:
     return Candidate("registration", physics, TrackerScale())
 
 
-def joint_derivatives(model: ErrorModel, robot: Any, data: MeasuredPoints) -> np.ndarray:
-    """d(predicted point)/d(joint j error) (6, 3N) by forward differences."""
-    base = predict(model, robot, data).ravel()
-    out = np.empty((6, base.shape[0]))
-    h = 1e-6
-    q_prev = data.ctx.q_prev
-    for j in range(6):  # six joints
-        dq = np.zeros(6)
-        dq[j] = h
-        ctx = data.ctx if q_prev is None else data.ctx.with_q_prev(q_prev + dq)
-        moved = MeasuredPoints(data.q + dq, data.xyz, ctx, data.ball_mm)
-        out[j] = (predict(model, robot, moved).ravel() - base) / h
-    return out
-
-
 def _coupling(model: ErrorModel, s: Setting) -> Candidate:
     physics = "one joint's error depends on another joint's angle"
     data = s.calibration
@@ -146,6 +132,16 @@ def _coupling(model: ErrorModel, s: Setting) -> Candidate:
                             "pairs)")
 
 
+def _structured(model: ErrorModel, s: Setting) -> Candidate:
+    physics = "one joint's error follows one driver (see the detail)"
+    screened = screen(model, s.robot, s.calibration, s.default_payload_kg)
+    if not screened:
+        return Candidate("joint_driver", physics, None, reason="no driver varies")
+    best = screened[0]
+    return Candidate("joint_driver", best.label, best.effect, variants=len(screened),
+                     detail=f"{best.label} (best of {len(screened)} joint × driver variants)")
+
+
 BUILDERS: dict[str, Callable[[ErrorModel, Setting], Candidate]] = {
     "joint_compliance": _compliance,
     "link_geometry": _geometry,
@@ -154,7 +150,10 @@ BUILDERS: dict[str, Callable[[ErrorModel, Setting], Candidate]] = {
     "thermal_drift": _thermal,
     "joint_coupling": _coupling,
     "registration": _registration,
+    "joint_driver": _structured,
 }
+#: structured effects: tried in every round, more than one may be accepted
+REPEATABLE: tuple[str, ...] = ("joint_driver",)
 CANDIDATES: tuple[str, ...] = tuple(BUILDERS)
 
 

@@ -5,7 +5,7 @@ against the quantity that drives it — payload for compliance, the motion
 direction for backlash, temperature or time for thermal drift, the source
 joint's angle for coupling, the joint-6 angle for a tool offset (the error
 turns with the flange), the distance from the points' centre for a scale error,
-the joint-2 angle for link geometry.
+the joint-2 angle for link geometry; a structured effect's driver.
 """
 
 from __future__ import annotations
@@ -51,6 +51,8 @@ def exposing_feature(effect: Effect, data: MeasuredPoints) -> Feature:
     if kind == "joint_coupling":
         src = int(getattr(effect, "source", 0))
         return Feature(np.degrees(q[:, src]), f"joint {src + 1} angle (°)")
+    if kind == "joint_driver":
+        return _driver_feature(effect, data)
     if kind == "tool_offset":
         return Feature(np.degrees(q[:, 5]), "joint 6 angle (°)")
     if kind == "registration":
@@ -58,6 +60,28 @@ def exposing_feature(effect: Effect, data: MeasuredPoints) -> Feature:
         return Feature(np.linalg.norm(data.xyz - centre, axis=1),
                        "distance from the points' centre (mm)")
     return Feature(np.degrees(q[:, 1]), "joint 2 angle (°)")
+
+
+def _driver_feature(effect: Effect, data: MeasuredPoints) -> Feature:
+    """A structured effect's driver: temperature, time, payload, the source joint's
+    direction or angle, or the joint's own angle (for gravity: the payload)."""
+    driver = getattr(effect, "driver", "")
+    ctx = data.ctx
+    source = getattr(effect, "source", None)
+    joint = int(getattr(effect, "joint", 0))
+    if driver == "direction" and source is not None:
+        direction = last_motion_direction(data.q, ctx.q_prev)[:, source]
+        return Feature(direction, f"direction joint {source + 1} last moved (−1 / +1)", True)
+    if driver == "angle" and source is not None:
+        return Feature(np.degrees(data.q[:, source]), f"joint {source + 1} angle (°)")
+    for name, field, label in (("temperature", "temp_c", "temperature (°C)"),
+                               ("time", "time_s", "time (s)"),
+                               ("gravity", "payload_kg", "payload (kg)"),
+                               ("payload", "payload_kg", "payload (kg)")):
+        value = getattr(ctx, field)
+        if driver == name and value is not None:
+            return Feature(np.asarray(value, dtype=float), label)
+    return Feature(np.degrees(data.q[:, joint]), f"joint {joint + 1} angle (°)")
 
 
 def along(vectors: np.ndarray, directions: np.ndarray) -> np.ndarray:

@@ -24,6 +24,7 @@ from rapidfix.diagnose.selection import (
     Selection,
     Trial,
 )
+from rapidfix.diagnose.structured import ranking_records
 from rapidfix.errors.candidates.geometry import LinkGeometry, error_names
 from rapidfix.errors.effect import Effect
 from rapidfix.errors.fit_effects import MeasuredPoints
@@ -85,7 +86,7 @@ def alternatives(sel: Selection) -> dict[str, list[str]]:
     for chosen in sel.accepted:
         rivals = [t.kind for t in sel.trials
                   if t.round == chosen.round and t is not chosen and not t.accepted
-                  and not t.after and t.stage is not None and t.verdict == "passes"
+                  and not t.after and t.stage is not None and _passes(t)
                   and t.kind not in (a.kind for a in sel.accepted)
                   and chosen.delta_bic - t.delta_bic <= BIC_MARGIN]
         if rivals:
@@ -93,12 +94,23 @@ def alternatives(sel: Selection) -> dict[str, list[str]]:
     return out
 
 
+def _passes(trial: Trial) -> bool:
+    return trial.verdict == "passes" or trial.verdict.endswith("candidate is preferred")
+
+
+def trial_name(trial: Trial) -> str:
+    """What an accepted effect is, in words: its kind, or for a structured effect where
+    it acts and what drives it, with its leading parameter."""
+    sentence = getattr(getattr(trial, "effect", None), "sentence", None)
+    return f"{trial.kind}: {sentence()}" if callable(sentence) else trial.kind
+
+
 def statement(sel: Selection) -> str:
     """The outcome in one or two plain sentences."""
     before = sel.before.validation.mean_mm
     floor = sel.floor_mm
     if sel.accepted and sel.final is not None:
-        names = " and ".join(t.kind for t in sel.accepted)
+        names = " and ".join(trial_name(t) for t in sel.accepted)
         after = sel.final.validation.mean_mm
         text = (f"The residual is explained by {names}: the mean error on the validation "
                 f"points falls from {before:.4f} mm to {after:.4f} mm (measurement noise "
@@ -115,10 +127,16 @@ def statement(sel: Selection) -> str:
         return (f"The residual is close to the noise floor ({before:.4f} mm mean on the "
                 f"validation points, noise alone about {floor:.4f} mm) and no candidate effect "
                 "explains what is left; nothing is worth adding, the model is unchanged.")
+    lead = ""
+    ranking = getattr(sel, "ranking", [])
+    if ranking:
+        lead = (f" What it follows most closely: {ranking[0].label} "
+                f"({100 * ranking[0].share:.0f} % of the calibration residual), not "
+                "enough to pass the tests.")
     return (f"No candidate effect explains the residual ({before:.4f} mm mean on the "
             f"validation points; noise alone would leave about {floor:.4f} mm). Its cause "
-            "is not in the library of candidates; the model is unchanged. See each "
-            "candidate's evidence below.")
+            "is not in the library of candidates; the model is unchanged." + lead +
+            " See each candidate's evidence below.")
 
 
 def _error_table(title: str, rows: list[tuple[str, dict[str, Any]]]) -> Table:
@@ -157,6 +175,7 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
                      "share_of_validation_residual_min": SHARE_MIN},
         "baseline_validation_mean_mm": sel.baseline.validation.mean_mm,
         "candidates": [trial_record(t) for t in sel.trials],
+        "residual_follows": ranking_records(sel.ranking),
     }
     summary.update(extra_summary or {})
     report = Report(title, summary, notes=[text, *(notes or [])])
@@ -187,13 +206,24 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
         f"variants), the validation residual follows the change it predicts (z ≥ {Z_MIN:g}) and "
         f"it explains at least {100 * SHARE_MIN:.0f} % of the mean squared validation "
         f"residual. Noise level: {sel.floor_mm:.4f} mm mean, from the {noise_source}."))
+    if sel.ranking:
+        report.tables.append(Table(
+            "What the residual left follows: joint × driver, best first",
+            ["joint", "driver", "source joint", "description", "linear BIC gain",
+             "% of calibration residual", "parameters"],
+            [[r["joint"], r["driver"], r["source_joint"], r["description"],
+              r["linear_bic_gain"], 100.0 * r["share_of_calibration_residual"],
+              r["parameters"]] for r in ranking_records(sel.ranking)],
+            "Each variant's regressors (times the points' sensitivity to that joint's "
+            "error, off everything the final model fits) regressed on the final model's "
+            "calibration residual; a ranking, not a test (the tests are the candidates')."))
     for trial in sel.accepted:
         effect = trial.stage.model.effects[-1] if trial.stage else None
         if effect is None:
             continue
         params = effect_parameters(effect)
         report.tables.append(Table(
-            f"{trial.kind}: fitted parameters (± 1σ)", ["parameter", "value", "σ"],
+            f"{trial_name(trial)}: fitted parameters (± 1σ)", ["parameter", "value", "σ"],
             [[p["name"], p["value"], p["std"]] for p in params], trial.physics))
     report.figures.append(position_error_figure(sel.before.validation.vectors,
                                                 final.validation.vectors))

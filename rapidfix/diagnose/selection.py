@@ -44,9 +44,10 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.diagnose.candidates import CANDIDATES, Candidate, Setting, build
+from rapidfix.diagnose.candidates import CANDIDATES, REPEATABLE, Candidate, Setting, build
 from rapidfix.diagnose.data import MEAN_NORM_PER_SIGMA
 from rapidfix.diagnose.residuals import Residuals, residuals
+from rapidfix.diagnose.structured import Screened, screen
 from rapidfix.errors.candidates.joint_reference import JointReference
 from rapidfix.errors.candidates.registration import TrackerFrame
 from rapidfix.errors.effect import Effect
@@ -58,6 +59,8 @@ from rapidfix.measure.registration import rigid_fit
 BIC_MARGIN = 10.0
 Z_MIN = 3.0
 SHARE_MIN = 0.2
+#: at most this many rounds (structured effects may be accepted more than once)
+MAX_ROUNDS = 8
 
 
 @dataclass
@@ -115,6 +118,8 @@ class Selection:
     final: Stage | None = None
     noise_sigma_mm: float = 0.0
     noise_refined: bool = False
+    #: what the final residual correlates with: joint × driver variants, best first
+    ranking: list[Screened] = field(default_factory=list)
 
     @property
     def floor_mm(self) -> float:
@@ -253,7 +258,7 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
     current = baseline
     remaining = list(candidates)
     round_no = 0
-    while remaining:
+    while remaining and round_no < MAX_ROUNDS:
         round_no += 1
         tried: list[Trial] = []
         for kind in remaining:
@@ -264,7 +269,7 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
         passing = [t for t in tried if t.verdict == "passes"]
         if not passing:
             break
-        best = max(passing, key=lambda t: t.delta_bic)
+        best = prefer_physical(max(passing, key=lambda t: t.delta_bic), passing)
         ahead, chosen = simpler_pair(best, tried, setting, val, noise_sigma_mm)
         sel.trials.extend(ahead)
         if best not in chosen:
@@ -276,10 +281,34 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
             sel.accepted.append(trial)
             assert trial.stage is not None
             current = trial.stage
-            remaining.remove(trial.kind)
+            if trial.kind not in REPEATABLE:
+                remaining.remove(trial.kind)
     sel.final = current if sel.accepted else before
     refine_noise(sel, current)
+    if any(kind in REPEATABLE for kind in candidates):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OutsideRangeWarning)
+            sel.ranking = screen(current.model, robot, cal, default_payload_kg)
     return sel
+
+
+def prefer_physical(best: Trial, passing: Sequence[Trial]) -> Trial:
+    """The round's winner, or a physical candidate that explains the data about as well.
+
+    A structured effect (a joint and a driver) that wins a round by no more than
+    `BIC_MARGIN` over a passing physical candidate gives way to it: the physical
+    cause is the better-founded description, and the report says both fit.
+    """
+    if best.kind not in REPEATABLE:
+        return best
+    physical = [t for t in passing if t.kind not in REPEATABLE
+                and best.delta_bic - t.delta_bic <= BIC_MARGIN]
+    if not physical:
+        return best
+    chosen = max(physical, key=lambda t: t.delta_bic)
+    best.verdict = (f"passes, explains it about as well as {chosen.kind} (BIC within "
+                    f"{BIC_MARGIN:g}); the physical candidate is preferred")
+    return chosen
 
 
 def _share(trial: Trial, noise_sigma_mm: float) -> float:

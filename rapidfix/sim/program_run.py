@@ -168,7 +168,7 @@ def measure_run(vr: VirtualRobot, run: Run, payload_kg: np.ndarray, *, seed: int
                                                       np.ndarray | None]:
     """Tracker-frame positions (M, 3) mm, tracker clock times (M,) and arm temperatures
     (M,) (None without thermal drift) of a run's measurements on the virtual robot."""
-    temp = vr.errors.temperature(run.time_s) if vr.errors.thermal is not None else None
+    temp = vr.errors.temperature(run.time_s) if vr.errors.needs_temperature else None
     ctx = RunConditions(payload_kg=np.asarray(payload_kg, dtype=float), time_s=run.time_s,
                         temp_c=temp, q_prev=run.q_prev)
     xyz = vr.measure(run.q, ctx, frame="tracker", seed=seed)

@@ -17,6 +17,20 @@ uses them):
 - ``tool_offset``: the target ball is not where setup.toml says;
 - ``joint_coupling``: one joint's error depends on another joint's angle;
 - ``registration_scale``: the tracker's length scale is off by some ppm.
+
+Effects the diagnosis has no ready-made candidate for (issue #14: it must trace
+them by the joint they act on and what drives them):
+
+- ``wrist_compliance``: joint 4 or 5 deflects under the gravity torque of the tool
+  body and the payload about its own axis (a soft wrist gearbox);
+- ``encoder_thermal``: the angle scale of one of joints 1–3 grows with the arm's
+  temperature (an encoder or gear ratio that drifts as the drive warms); the sweeps
+  are taken cold, then the work cycle starts (at `cycle_start_s`, the session's
+  points) and the arm's temperature swings by a few kelvin with it;
+- ``direction_zero_shift``: one joint's zero shifts with the direction another
+  joint last moved (a wrist gear train or a dress pack that pulls on the next axis);
+- ``joint_coupling2``: one joint's error follows the second harmonic of another
+  joint's angle (an elliptic bearing or gear, twice per turn).
 """
 
 from __future__ import annotations
@@ -35,6 +49,10 @@ EFFECTS: tuple[str, ...] = (
     "tool_offset",
     "joint_coupling",
     "registration_scale",
+    "wrist_compliance",
+    "encoder_thermal",
+    "direction_zero_shift",
+    "joint_coupling2",
 )
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s², base z is up
@@ -98,6 +116,14 @@ class TrueErrors:
     tool_offset: np.ndarray | None = None  # (3,) true minus declared ball offset, mm
     coupling: dict[str, float] | None = None  # source, target (0-based), amp rad, phase
     scale_ppm: float = 0.0
+    #: joint (0-based), k_rad_per_nm, tool_kg, tool_cog_mm (flange frame)
+    wrist: dict[str, Any] | None = None
+    #: joint (0-based), ppm_per_k, t_ref_c, swing_k, period_s
+    encoder: dict[str, float] | None = None
+    #: source, target (0-based), shift_rad (half the zero shift between directions)
+    direction_shift: dict[str, float] | None = None
+    #: source, target (0-based), amp_rad, phase_rad of a second harmonic
+    coupling2: dict[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -109,7 +135,11 @@ class TrueErrors:
               "thermal_drift": self.thermal is not None,
               "tool_offset": self.tool_offset is not None,
               "joint_coupling": self.coupling is not None,
-              "registration_scale": self.scale_ppm != 0.0}
+              "registration_scale": self.scale_ppm != 0.0,
+              "wrist_compliance": self.wrist is not None,
+              "encoder_thermal": self.encoder is not None,
+              "direction_zero_shift": self.direction_shift is not None,
+              "joint_coupling2": self.coupling2 is not None}
         return [name for name in EFFECTS if on[name]]
 
     # ---- drawing ---------------------------------------------------------------------
@@ -139,6 +169,27 @@ class TrueErrors:
                     "amp_rad": float(np.radians(rng.uniform(0.01, 0.03))),
                     "phase_rad": float(rng.uniform(0.0, 2.0 * np.pi))}
         scale = float(rng.uniform(30.0, 80.0) * rng.choice([-1.0, 1.0]))
+        # effects outside the diagnosis' candidates: their own stream, derived from the
+        # state here without advancing `rng` (the tracker is placed from it next)
+        state = rng.bit_generator.state["state"]
+        rng = np.random.default_rng([int(state["state"]) % 2**63, int(state["inc"]) % 2**63, 14])
+        wrist = {"joint": int(rng.choice([3, 4])),
+                 "k_rad_per_nm": float(rng.uniform(5e-5, 1e-4)),
+                 "tool_kg": float(rng.uniform(1.5, 3.0)),
+                 "tool_cog_mm": [0.0, 0.0, float(rng.uniform(60.0, 120.0))]}
+        encoder = {"joint": int(rng.integers(3)), "ppm_per_k": float(rng.uniform(30.0, 60.0)),
+                   "t_ref_c": 20.0, "swing_k": float(rng.uniform(2.0, 3.5)),
+                   "period_s": float(rng.uniform(300.0, 500.0)), "cycle_start_s": 3000.0}
+        shift_pairs = ((3, 4), (2, 1), (4, 3), (0, 2))
+        src2, dst2 = shift_pairs[int(rng.integers(len(shift_pairs)))]
+        shift = {"source": src2, "target": dst2,
+                 "shift_rad": float(np.radians(rng.uniform(0.015, 0.03))
+                                    * rng.choice([-1.0, 1.0]))}
+        pairs2 = ((1, 2), (3, 4), (0, 1), (2, 1))
+        src3, dst3 = pairs2[int(rng.integers(len(pairs2)))]
+        coupling2 = {"source": src3, "target": dst3,
+                     "amp_rad": float(np.radians(rng.uniform(0.015, 0.03))),
+                     "phase_rad": float(rng.uniform(0.0, 2.0 * np.pi))}
         on = set(effects)
         geometry = "link_geometry" in on
         return cls(
@@ -152,25 +203,60 @@ class TrueErrors:
             tool_offset=tool if "tool_offset" in on else None,
             coupling=coupling if "joint_coupling" in on else None,
             scale_ppm=scale if "registration_scale" in on else 0.0,
+            wrist=wrist if "wrist_compliance" in on else None,
+            encoder=encoder if "encoder_thermal" in on else None,
+            direction_shift=shift if "direction_zero_shift" in on else None,
+            coupling2=coupling2 if "joint_coupling2" in on else None,
         )
 
     # ---- evaluation ------------------------------------------------------------------
 
-    def joint_delta(self, q: np.ndarray, direction: np.ndarray | None) -> np.ndarray:
-        """Joint errors (N, 6) rad that depend on the commanded joints and motion direction."""
+    @property
+    def needs_direction(self) -> bool:
+        """True when some error depends on the direction joints last moved."""
+        return self.backlash is not None or self.direction_shift is not None
+
+    @property
+    def needs_temperature(self) -> bool:
+        """True when some error depends on the arm's temperature."""
+        return self.thermal is not None or self.encoder is not None
+
+    def joint_delta(self, q: np.ndarray, direction: np.ndarray | None,
+                    temp_c: np.ndarray | None = None) -> np.ndarray:
+        """Joint errors (N, 6) rad that depend on the commanded joints, the motion
+        direction and the temperature (None: the reference temperature)."""
         delta = self.joint(q)
         if self.coupling is not None:
             c = self.coupling
             delta[:, int(c["target"])] += c["amp_rad"] * np.sin(
                 q[:, int(c["source"])] + c["phase_rad"])
+        if self.coupling2 is not None:
+            c = self.coupling2
+            delta[:, int(c["target"])] += c["amp_rad"] * np.sin(
+                2.0 * q[:, int(c["source"])] + c["phase_rad"])
         if self.backlash is not None and direction is not None:
             delta -= 0.5 * self.backlash * direction
+        if self.direction_shift is not None and direction is not None:
+            c = self.direction_shift
+            delta[:, int(c["target"])] += c["shift_rad"] * direction[:, int(c["source"])]
+        if self.encoder is not None and temp_c is not None:
+            e = self.encoder
+            j = int(e["joint"])
+            growth = 1e-6 * e["ppm_per_k"] * (np.asarray(temp_c, dtype=float) - e["t_ref_c"])
+            delta[:, j] += growth * q[:, j]
         return delta
 
     def temperature(self, time_s: np.ndarray) -> np.ndarray:
-        """Arm temperature (°C) at time t: a first-order warm-up from t_start_c."""
+        """Arm temperature (°C) at time t: a first-order warm-up from t_start_c, plus the
+        work cycle's swing when the encoder scale depends on it."""
         th = self.thermal or {"t_start_c": 20.0, "rise_k": 0.0, "tau_s": 1.0}
-        return th["t_start_c"] + th["rise_k"] * -np.expm1(-np.asarray(time_s) / th["tau_s"])
+        t = np.asarray(time_s, dtype=float)
+        out = th["t_start_c"] + th["rise_k"] * -np.expm1(-t / th["tau_s"])
+        if self.encoder is not None:
+            e = self.encoder
+            cycle = np.maximum(t - e.get("cycle_start_s", 0.0), 0.0)
+            out = out + e["swing_k"] * np.sin(2.0 * np.pi * cycle / e["period_s"])
+        return out
 
     def thermal_scale(self, temp_c: np.ndarray | None) -> np.ndarray | float:
         """Length factor of the arm at temperature T: 1 + α (T − T_ref)."""
@@ -205,6 +291,21 @@ class TrueErrors:
                                    "phase_rad": c["phase_rad"]}
         if self.scale_ppm:
             d["registration_scale_ppm"] = self.scale_ppm
+        if self.wrist is not None:
+            d["wrist_compliance"] = {**self.wrist, "joint": int(self.wrist["joint"]) + 1}
+        if self.encoder is not None:
+            d["encoder_thermal"] = {**self.encoder, "joint": int(self.encoder["joint"]) + 1}
+        if self.direction_shift is not None:
+            c = self.direction_shift
+            d["direction_zero_shift"] = {"source_joint": int(c["source"]) + 1,
+                                         "target_joint": int(c["target"]) + 1,
+                                         "shift_deg": float(np.degrees(c["shift_rad"]))}
+        if self.coupling2 is not None:
+            c = self.coupling2
+            d["joint_coupling2"] = {"source_joint": int(c["source"]) + 1,
+                                    "target_joint": int(c["target"]) + 1,
+                                    "amplitude_deg": float(np.degrees(c["amp_rad"])),
+                                    "phase_rad": c["phase_rad"]}
         return d
 
     @classmethod
@@ -213,6 +314,10 @@ class TrueErrors:
         geo = d.get("link_geometry")
         comp = d.get("joint_compliance_rad_per_nm")
         coup = d.get("joint_coupling")
+        wrist = d.get("wrist_compliance")
+        enc = d.get("encoder_thermal")
+        shift = d.get("direction_zero_shift")
+        coup2 = d.get("joint_coupling2")
         return cls(
             joint=JointErrors.from_dict(d["joint_errors"]),
             compliance=None if comp is None else np.array([comp["j2"], comp["j3"]]),
@@ -228,6 +333,15 @@ class TrueErrors:
                 "amp_rad": float(np.radians(coup["amplitude_deg"])),
                 "phase_rad": coup["phase_rad"]},
             scale_ppm=float(d.get("registration_scale_ppm", 0.0)),
+            wrist=None if wrist is None else {**wrist, "joint": int(wrist["joint"]) - 1},
+            encoder=None if enc is None else {**enc, "joint": int(enc["joint"]) - 1},
+            direction_shift=None if shift is None else {
+                "source": shift["source_joint"] - 1, "target": shift["target_joint"] - 1,
+                "shift_rad": float(np.radians(shift["shift_deg"]))},
+            coupling2=None if coup2 is None else {
+                "source": coup2["source_joint"] - 1, "target": coup2["target_joint"] - 1,
+                "amp_rad": float(np.radians(coup2["amplitude_deg"])),
+                "phase_rad": coup2["phase_rad"]},
         )
 
 
@@ -279,3 +393,12 @@ def gravity_torque(axis_dirs: np.ndarray, axis_points: np.ndarray, payload_pos: 
         moment = np.cross(lever, force)  # (N, B, 3)
         out[:, k] = np.einsum("nbi,ni,b->n", moment, axis_dirs[:, j], carried[k])
     return out
+
+
+def torque_about(axis_dir: np.ndarray, axis_point: np.ndarray, positions: np.ndarray,
+                 masses: np.ndarray) -> np.ndarray:
+    """Gravity torque (N,) N·m about one axis (N, 3) through (N, 3) mm of point masses
+    (kg, (N, B)) at positions (N, B, 3) mm."""
+    lever = (positions - axis_point[:, None, :]) * 1e-3
+    force = masses[..., None] * GRAVITY
+    return np.einsum("nbi,ni->n", np.cross(lever, force), axis_dir)

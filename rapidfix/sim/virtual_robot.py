@@ -19,7 +19,7 @@ import numpy as np
 
 from rapidfix.kinematics import RobotModel, load_robot
 from rapidfix.sim.tracker import VirtualTracker
-from rapidfix.sim.true_errors import TrueErrors, gravity_torque
+from rapidfix.sim.true_errors import TrueErrors, gravity_torque, torque_about
 
 DEFAULT_ROBOT = "IRB1600-10/1.45"
 #: Target ball in the flange frame, mm: 100 mm off the joint-6 axis so joint 6 draws a circle.
@@ -113,7 +113,7 @@ class VirtualRobot:
         if temp is not None:
             return np.broadcast_to(np.asarray(temp, dtype=float), (n,))
         time = _field(ctx, "time_s")
-        if time is not None and self.errors.thermal is not None:
+        if time is not None and self.errors.needs_temperature:
             return self.errors.temperature(np.broadcast_to(np.asarray(time, dtype=float), (n,)))
         return None
 
@@ -123,11 +123,14 @@ class VirtualRobot:
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         q_prev = _field(ctx, "q_prev")
         direction = None
-        if self.errors.backlash is not None:
+        if self.errors.needs_direction:
             direction = motion_direction(q, None if q_prev is None else np.atleast_2d(q_prev))
-        q_act = q + self.errors.joint_delta(q, direction)
+        temp = self.temperature(ctx, len(q)) if self.errors.encoder is not None else None
+        q_act = q + self.errors.joint_delta(q, direction, temp)
         if jitter is not None:
             q_act = q_act + jitter
+        if self.errors.wrist is not None:
+            q_act = self._wrist_deflection(q_act, ctx)
         if self.errors.compliance is not None:
             payload = _field(ctx, "payload_kg")
             payload = self.payload_kg if payload is None else payload
@@ -143,6 +146,32 @@ class VirtualRobot:
             q_act = q_act.copy()
             q_act[:, 1:3] += self.errors.compliance * torque
         return q_act
+
+    def _payload_point(self, T: np.ndarray, ctx: Any) -> np.ndarray:
+        """Where the payload's centre of gravity is (N, 3) mm for flange poses T."""
+        cog = _field(ctx, "payload_cog_mm")
+        local = self.true_smr_offset_mm if cog is None else cog
+        local = np.broadcast_to(np.asarray(local, dtype=float), (T.shape[0], 3))
+        return np.einsum("nij,nj->ni", T[:, :3, :3], local) + T[:, :3, 3]
+
+    def _wrist_deflection(self, q_act: np.ndarray, ctx: Any) -> np.ndarray:
+        """A wrist joint turned by its compliance × the gravity torque of tool and payload."""
+        w = self.errors.wrist
+        assert w is not None
+        j = int(w["joint"])
+        n = len(q_act)
+        payload = _field(ctx, "payload_kg")
+        payload = np.broadcast_to(np.asarray(self.payload_kg if payload is None else payload,
+                                             dtype=float), (n,))
+        T = self.actual_model.fk(q_act)
+        tool = np.einsum("nij,j->ni", T[:, :3, :3], np.asarray(w["tool_cog_mm"])) + T[:, :3, 3]
+        positions = np.stack([tool, self._payload_point(T, ctx)], axis=1)
+        masses = np.column_stack([np.full(n, w["tool_kg"]), payload])
+        dirs, points = self.actual_model.joint_frames(q_act)
+        out = q_act.copy()
+        out[:, j] += w["k_rad_per_nm"] * torque_about(dirs[:, j], points[:, j], positions,
+                                                      masses)
+        return out
 
     def _ball(self, q_act: np.ndarray, scale: np.ndarray | float) -> np.ndarray:
         T = self.actual_model.fk(q_act)

@@ -115,18 +115,26 @@ def loop(effects: tuple[str, ...], seed: int, n_calibration: int = 60, *,
 
 
 def check_on_robot(effects: tuple[str, ...], seed: int, n_calibration: int = 60, *,
-                   limit: float = 1.5) -> None:
+                   limit: float = 1.5, check_prediction: bool = True) -> float:
     """The diagnosed model compensates a real program: every move compensated, the
     robot lands within `limit` × the noise floor having started far off, and the
-    error the rewrite predicts for the program as written is the executed one."""
+    error the rewrite predicts for the program as written is the executed one.
+
+    The prediction is in the base frame, the executed error in the gauge of a turn
+    about axis 1 (`align_axis1`): where the per-joint errors of joint 1 are large the
+    two differ whatever the model (`check_prediction=False` skips that comparison).
+    Returns the mean error after, in units of the noise floor."""
     _, rewritten, before, after, floor = loop(effects, seed, n_calibration)
     assert rewritten.moves_compensated == rewritten.moves_total, rewritten.report_lines()
     assert after.mean_mm <= limit * floor, (effects, seed, after.mean_mm, floor)
     assert before.mean_mm > 4 * floor, (effects, seed, before.mean_mm, floor)
+    assert rewritten.worst_predicted_mm < 1e-3
+    if not check_prediction:
+        return after.mean_mm / floor
     predicted = rewritten.predicted_before_mm[0]
     assert abs(predicted - before.mean_mm) <= 0.25 * before.mean_mm + 2 * floor, (
         effects, seed, predicted, before.mean_mm)
-    assert rewritten.worst_predicted_mm < 1e-3
+    return after.mean_mm / floor
 
 
 @pytest.fixture(scope="session")

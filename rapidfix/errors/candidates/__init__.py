@@ -6,7 +6,8 @@ unexplained: `compliance` (joints 2 and 3 deflecting under gravity and payload),
 `backlash`, `thermal` (arm growth with temperature or time), `coupling` (one
 joint's error depending on another's angle), `registration` (tracker frame and
 scale) and `joint_reference` (the per-joint model's offsets and first harmonics re-referenced
-on new data).
+on new data), and `joint_driver`: one joint's error as a low-order function of one
+driver (gravity torque, temperature, time, payload, another joint's direction or angle).
 All are registered with `rapidfix.errors.effect` by their `type_name`.
 """
 
@@ -15,6 +16,8 @@ from rapidfix.errors.candidates import (  # noqa: F401  (registers every effect)
     compliance,
     coupling,
     geometry,
+    gravity,
+    joint_driver,
     joint_reference,
     registration,
     thermal,

@@ -1,0 +1,30 @@
+"""How the predicted points move when one joint's error changes: d(point)/d(Δθ_j).
+
+Screens (which joint pair couples, which joint a driver acts on) project the
+residual on these derivatives times a driver's regressors instead of refitting
+every variant.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from rapidfix.errors.fit_effects import MeasuredPoints, predict
+from rapidfix.errors.model import ErrorModel
+
+
+def joint_derivatives(model: ErrorModel, robot: Any, data: MeasuredPoints) -> np.ndarray:
+    """d(predicted point)/d(joint j error) (6, 3N) by forward differences."""
+    base = predict(model, robot, data).ravel()
+    out = np.empty((6, base.shape[0]))
+    h = 1e-6
+    q_prev = data.ctx.q_prev
+    for j in range(6):  # six joints
+        dq = np.zeros(6)
+        dq[j] = h
+        ctx = data.ctx if q_prev is None else data.ctx.with_q_prev(q_prev + dq)
+        moved = MeasuredPoints(data.q + dq, data.xyz, ctx, data.ball_mm)
+        out[j] = (predict(model, robot, moved).ravel() - base) / h
+    return out

@@ -1,0 +1,119 @@
+"""The structured search: which joint's error, driven by what, the residual follows.
+
+Every variant is a `JointDriver`: a joint and a driver (the gravity torque about
+that joint, the temperature or time, the payload, the direction or the angle of
+another joint, its own angle's second harmonic). Variants whose driver the
+calibration set does not vary are not screened. Each is screened without
+refitting: its regressors times the sensitivity of the points to the error of the
+joint they act on, projected off everything the current model already fits, are
+regressed on the residual (linearised least squares). The score is the linear
+model's BIC gain, n ln(RSS / RSS') − k ln n. The best variant is then fitted and
+judged like any candidate, charged for the choice among all variants screened;
+the whole ranking goes into the report as what the residual correlates with,
+whether or not anything is accepted.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rapidfix.diagnose.sensitivity import joint_derivatives
+from rapidfix.errors.candidates.joint_driver import JointDriver
+from rapidfix.errors.context import last_motion_direction
+from rapidfix.errors.fit_effects import MeasuredPoints, jacobian
+from rapidfix.errors.joint_rbf import OutsideRangeWarning
+from rapidfix.errors.model import ErrorModel
+
+#: a context variable must vary by more than this to drive an effect
+MIN_SPREAD = {"temp_c": 0.2, "time_s": 60.0, "payload_kg": 0.1}
+#: singular values of the unit-scaled, projected regressors below this fraction of the
+#: largest are degenerate (the column duplicates what the model already fits)
+RCOND = 1e-6
+
+
+@dataclass(frozen=True)
+class Screened:
+    """One variant's screen: the effect to fit, its linear BIC gain and share of the residual."""
+
+    effect: JointDriver
+    score: float
+    share: float
+    rank: int
+
+    @property
+    def label(self) -> str:
+        """Where it acts and what drives it."""
+        return self.effect.what()
+
+
+def variants(robot_name: str, data: MeasuredPoints, default_payload_kg: float
+             ) -> list[JointDriver]:
+    """Every joint × driver the calibration set can tell anything about."""
+    ctx = data.ctx
+    out: list[JointDriver] = []
+    payload = ctx.payload_kg
+    for j in range(1, 6):  # joint 1's axis is vertical: gravity never loads it
+        out.append(JointDriver(j, "gravity", robot=robot_name, payload_point_mm=data.ball_mm,
+                               default_payload_kg=default_payload_kg))
+    for driver, field in (("temperature", "temp_c"), ("time", "time_s")):
+        value = getattr(ctx, field)
+        if value is not None and np.ptp(value) > MIN_SPREAD[field]:
+            out += [JointDriver(j, driver, reference=float(np.mean(value))) for j in range(6)]
+            break  # time stands in for the temperature only when there is none
+    if payload is not None and np.ptp(payload) > MIN_SPREAD["payload_kg"]:
+        out += [JointDriver(j, "payload", reference=float(np.mean(payload))) for j in range(6)]
+    direction = last_motion_direction(data.q, ctx.q_prev)
+    both = (direction > 0).any(axis=0) & (direction < 0).any(axis=0)
+    for s in range(6):
+        if both[s]:
+            out += [JointDriver(j, "direction", source=s) for j in range(6) if j != s]
+    for s in range(6):
+        out += [JointDriver(j, "angle", source=s) for j in range(6) if j != s]
+    out += [JointDriver(j, "own_angle") for j in range(6)]
+    return out
+
+
+def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_kg: float
+           ) -> list[Screened]:
+    """Every variant screened on the current (fitted) model's residual, best first."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutsideRangeWarning)
+        r, jac = jacobian(model, robot, data, model.free_params())
+        grads = joint_derivatives(model, robot, data)
+    basis = np.linalg.qr(jac)[0] if jac.size else np.zeros((r.size, 0))
+    r_perp = r - basis @ (basis.T @ r)
+    rss = float(r_perp @ r_perp) + 1e-300
+    n = r.size
+    out = []
+    for eff in variants(model.robot, data, default_payload_kg):  # ~90 small regressions
+        F = np.repeat(eff.regressors(data.q, data.ctx), 3, axis=0)
+        cols = grads[eff.acts_on].T * F
+        before = np.linalg.norm(cols, axis=0)
+        cols -= basis @ (basis.T @ cols)
+        norms = np.linalg.norm(cols, axis=0)
+        fresh = norms > 1e-2 * before  # what the model fits already is not new
+        cols = cols[:, fresh] / norms[fresh]
+        u, s, _ = np.linalg.svd(cols, full_matrices=False)
+        keep = s > RCOND * (s[0] if s.size else np.inf)
+        if not keep.any():
+            continue
+        proj = u[:, keep].T @ r_perp
+        gain = min(float(proj @ proj), rss * (1 - 1e-12))
+        k = int(keep.sum())
+        out.append(Screened(eff, float(n * np.log(rss / (rss - gain)) - k * np.log(n)),
+                            gain / rss, k))
+    out.sort(key=lambda v: -v.score)
+    return out
+
+
+def ranking_records(screened: list[Screened], top: int = 12) -> list[dict[str, Any]]:
+    """JSON rows of the best-ranked variants: where, driven by what, how strongly."""
+    return [{"joint": v.effect.joint + 1, "driver": v.effect.driver,
+             "source_joint": None if v.effect.source is None else v.effect.source + 1,
+             "description": v.label, "linear_bic_gain": v.score,
+             "share_of_calibration_residual": v.share, "parameters": v.rank}
+            for v in screened[:top]]
