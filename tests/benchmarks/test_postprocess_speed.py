@@ -12,7 +12,6 @@ speed-up on all cores against one core.
 from __future__ import annotations
 
 import os
-import shutil
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -22,13 +21,14 @@ import pytest
 
 from rapidfix import pipeline
 from rapidfix.errors.model_file import save_model
-from rapidfix.postprocess.batch import BatchSettings, run_batch
+from rapidfix.postprocess.batch import BatchSettings
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
 from rapidfix.rapid import load_program
 from rapidfix.sim import simulate_cell
 
 sys.path.insert(0, str(Path(__file__).parent))
+from batch_timing import batch_timings
 from cam_program import cam_program
 
 N_MOVES = int(os.environ.get("RAPIDFIX_BENCH_MOVES", "100000"))
@@ -85,14 +85,7 @@ def test_batch_speedup(model_path, tmp_path):
         (folder / f"part{i}.mod").write_text(text.replace("MODULE Part", f"MODULE Part{i}", 1))
     settings = BatchSettings(str(model_path), None, None, (), RewriteOptions())
     cores = os.cpu_count() or 1
-    timings = {}
-    for workers in (1, cores):
-        out = tmp_path / f"out{workers}"
-        t0 = time.perf_counter()
-        summary = run_batch(src, out, settings, workers=workers, progress=False)
-        timings[workers] = time.perf_counter() - t0
-        assert summary.count("ok") == N_FILES
-        shutil.rmtree(out)
+    timings = batch_timings(src, tmp_path, settings, N_FILES)
     print(
         f"\nbatch of {N_FILES} programs (500 moves each): 1 core {timings[1]:.1f} s, "
         f"{cores} cores {timings[cores]:.1f} s, speed-up {timings[1] / timings[cores]:.2f}x"

@@ -32,6 +32,7 @@ import pytest
 from lark import Lark
 
 sys.path.insert(0, str(Path(__file__).parent))
+from batch_timing import batch_timings
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
@@ -181,9 +182,7 @@ def test_rewrite_phases(model_path, tmp_path, monkeypatch):
 
 def test_batch_of_mixed_shapes(model_path, tmp_path):
     """A folder of 200 programs of every shape (about 1,000 lines each), on 1 core and on all."""
-    import shutil
-
-    from rapidfix.postprocess.batch import BatchSettings, run_batch
+    from rapidfix.postprocess.batch import BatchSettings
     from rapidfix.postprocess.rewrite import RewriteOptions
 
     n_files = int(os.environ.get("RAPIDFIX_BENCH_FILES", "200"))
@@ -196,14 +195,7 @@ def test_batch_of_mixed_shapes(model_path, tmp_path):
         (folder / f"part{i}{_suffix(shape)}").write_bytes(text.encode())
     settings = BatchSettings(str(model_path), None, None, (), RewriteOptions(force=True))
     cores = os.cpu_count() or 1
-    timings = {}
-    for workers in (1, cores):
-        out = tmp_path / f"out{workers}"
-        t0 = time.perf_counter()
-        summary = run_batch(src, out, settings, workers=workers, progress=False)
-        timings[workers] = time.perf_counter() - t0
-        assert summary.count("ok") == n_files
-        shutil.rmtree(out)
+    timings = batch_timings(src, tmp_path, settings, n_files)
     print(f"\nbatch of {n_files} mixed programs (~1,000 lines each): 1 core {timings[1]:.1f} s, "
           f"{cores} cores {timings[cores]:.1f} s, speed-up {timings[1] / timings[cores]:.2f}x")
 
