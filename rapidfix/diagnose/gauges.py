@@ -114,8 +114,8 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
     # tool offset; the ball must not move: t a6×(b−p6) + ω×b + u + v = 0
     lever = np.cross(a6, ball - p6)[:, None]
     blocks, current, sigma = [lever], [_joint6_zero(model, data)], [JOINT_ZERO_SIGMA_RAD]
-    errors = geometry.errors() if geometry is not None else None
-    if errors is not None:
+    if geometry is not None:
+        errors = geometry.errors()
         blocks += [-_skew(ball), np.eye(3)]
         current += [*(home_r.T @ errors[23:26]), *(home_r.T @ errors[20:23])]
         sigma += [HOME_TURN_SIGMA_RAD] * 3 + [HOME_SHIFT_SIGMA_MM] * 3
