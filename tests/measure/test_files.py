@@ -227,3 +227,27 @@ def test_setup_round_trip(tmp_path):
     assert back.robot == setup.robot and back.smr_offset_mm.tolist() == [1.5, -2.0, 100.25]
     assert (back.tracker_sigma_mm, back.payload_kg) == (0.0125, 7.5)
     assert back.extra == {"operator": "test", "tracker_model": "AT960"}
+
+
+@pytest.mark.parametrize("delimiter", [";", "\t"])
+def test_semicolon_and_tab_exports_with_decimal_commas_read_as_the_comma_file(
+        tmp_path, delimiter):
+    plain = read_points(write(tmp_path, "p.csv", POINTS))
+    other = "\n".join(delimiter.join(c.replace(".", ",") for c in line.split(","))
+                      for line in POINTS.splitlines()) + "\n"
+    table = read_points(write(tmp_path, "o.csv", other))
+    assert table.point_id.tolist() == plain.point_id.tolist()
+    assert np.array_equal(table.q, plain.q) and np.array_equal(table.xyz, plain.xyz)
+    assert np.array_equal(table.payload_kg, plain.payload_kg)
+
+
+def test_comment_lines_and_text_columns_are_skipped_with_a_warning(tmp_path):
+    lines = POINTS.splitlines()
+    text = "# exported by a tracker\n# units: mm, deg\n" + lines[0] + ",note\n"
+    text += "\n".join(f"{line},{word}" for line, word in zip(lines[1:], ["ok", "re-shot", "ok"]))
+    text = text.replace("P2,", "# a comment between rows\nP2,") + "\n"
+    with pytest.warns(MeasurementWarning, match="'note' is not numeric"):
+        table = read_points(write(tmp_path, "p.csv", text))
+    plain = read_points(write(tmp_path, "plain.csv", POINTS))
+    assert np.array_equal(table.xyz, plain.xyz) and "note" not in table.extra
+    assert table.rows.tolist() == [4, 6, 7]  # line numbers in the file, comments counted
