@@ -77,7 +77,8 @@ def _driver_feature(effect: Effect, data: MeasuredPoints) -> Feature:
     for name, field, label in (("temperature", "temp_c", "temperature (°C)"),
                                ("time", "time_s", "time (s)"),
                                ("gravity", "payload_kg", "payload (kg)"),
-                               ("payload", "payload_kg", "payload (kg)")):
+                               ("payload", "payload_kg", "payload (kg)"),
+                               ("overturning", "payload_kg", "payload (kg)")):
         value = getattr(ctx, field)
         if driver == name and value is not None:
             return Feature(np.asarray(value, dtype=float), label)
