@@ -41,8 +41,9 @@ Effects that act where no joint error can (issue #14, frames: tool, base, link):
 - ``base_tilt``: a compliant foundation: the base tilts about horizontal axes
   through a pivot below the base origin, in proportion to the overturning moment of
   the arm's links and the payload about the base;
-- ``link_thermal``: one link (the lower or the upper arm) grows by α·L·ΔT as a
-  drive next to it warms up over the session (α of steel).
+- ``link_thermal``: one link (the lower or the upper arm) grows by α·L·ΔT (α of
+  steel) as the drive next to it warms up once the work cycle starts (at
+  `cycle_start_s`, the session's points; the sweeps are taken cold).
 """
 
 from __future__ import annotations
@@ -145,7 +146,8 @@ class TrueErrors:
     tool_bending: dict[str, float] | None = None
     #: k_rad_per_nm, pivot_depth_mm
     base_tilt: dict[str, float] | None = None
-    #: link (1-based: the link after that joint), alpha_per_k, t_ref_c, rise_k, tau_s
+    #: link (1-based: the link after that joint), alpha_per_k, t_ref_c, rise_k, tau_s,
+    #: cycle_start_s
     link_thermal: dict[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
@@ -287,7 +289,8 @@ class TrueErrors:
             out = out + e["swing_k"] * np.sin(2.0 * np.pi * cycle / e["period_s"])
         if self.link_thermal is not None:
             lt = self.link_thermal
-            out = out + lt["rise_k"] * -np.expm1(-t / lt["tau_s"])
+            warm = np.maximum(t - lt["cycle_start_s"], 0.0)
+            out = out + lt["rise_k"] * -np.expm1(-warm / lt["tau_s"])
         return out
 
     def thermal_scale(self, temp_c: np.ndarray | None) -> np.ndarray | float:
@@ -459,8 +462,8 @@ def _draw_frames(rng: np.random.Generator) -> dict[str, dict[str, float]]:
         "base_tilt": {"k_rad_per_nm": float(own.uniform(2e-7, 4e-7)),
                       "pivot_depth_mm": float(own.uniform(0.0, 300.0))},
         "link_thermal": {"link": int(own.choice([2, 3])), "alpha_per_k": 11.5e-6,
-                         "t_ref_c": 20.0, "rise_k": float(own.uniform(8.0, 14.0)),
-                         "tau_s": float(own.uniform(600.0, 1500.0))},
+                         "t_ref_c": 20.0, "rise_k": float(own.uniform(12.0, 20.0)),
+                         "tau_s": float(own.uniform(150.0, 300.0)), "cycle_start_s": 3000.0},
     }
 
 

@@ -219,7 +219,9 @@ class FrameDriver(VectorEffect):
         if self.frame == "base":
             return ("the base tilts with the overturning moment of the arm and its payload "
                     "(a compliant foundation)")
-        return f"link {self.link} grows with the temperature (along the link)"
+        end = "tool0" if self.link == 6 else f"joint {(self.link or 0) + 1}"
+        return (f"link {self.link} (joint {self.link} to {end}) grows with the temperature "
+                "(along the link)")
 
     def sentence(self) -> str:
         """`what()` with its leading parameters and their standard deviations."""
