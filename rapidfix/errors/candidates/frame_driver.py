@@ -106,6 +106,9 @@ class FrameDriver(VectorEffect):
         self.reference = float(reference)
         self.payload_point_mm = np.asarray(payload_point_mm, dtype=float).reshape(3)
         self.default_payload_kg = float(default_payload_kg)
+        #: no joint and no source joint: a frame effect acts beyond the joints
+        self.joint: int | None = None
+        self.source: int | None = None
         self._cache: tuple[tuple, Any] | None = None
 
     # -- drivers --------------------------------------------------------------------
