@@ -42,6 +42,9 @@ MIN_SPREAD = {"temp_c": 0.2, "time_s": 60.0, "payload_kg": 0.1}
 #: singular values of the unit-scaled, projected regressors below this fraction of the
 #: largest are degenerate (the column duplicates what the model already fits)
 RCOND = 1e-6
+#: links that may grow (1-based: the link after that joint; 6 runs from axis 6 to tool0);
+#: those of no length in the nominal model (coincident axis points) are left out
+LINKS = (1, 2, 3, 4, 5, 6)
 
 
 @dataclass(frozen=True)
@@ -72,9 +75,6 @@ def frame_variants(robot_name: str, data: MeasuredPoints, default_payload_kg: fl
                 for link in LINKS if _link_length(robot_name, link) > 1.0]
     return out
 
-
-#: links that may grow (1-based: the link after that joint; 6 is the flange to tool0)
-LINKS = (1, 2, 3, 4, 5, 6)
 
 
 def _link_length(robot_name: str, link: int) -> float:

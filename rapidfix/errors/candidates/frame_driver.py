@@ -34,7 +34,12 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rapidfix.errors.candidates.gravity import GRAVITY_MS2, link_transforms, nominal_robot
+from rapidfix.errors.candidates.gravity import (
+    DOWN,
+    GRAVITY_MS2,
+    link_transforms,
+    nominal_robot,
+)
 from rapidfix.errors.candidates.vector import VectorEffect
 from rapidfix.errors.context import Context
 from rapidfix.errors.effect import Geometry
@@ -56,10 +61,9 @@ FRAMES: dict[str, tuple[str, tuple[str, ...], tuple[float, ...], frozenset[str]]
              frozenset({"temp_c"})),
 }
 Z = np.array([0.0, 0.0, 1.0])
-DOWN = np.array([0.0, 0.0, -1.0])
 
 
-def _skew_rotation(omega: np.ndarray) -> np.ndarray:
+def _rotations(omega: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of rotation vectors (N, 3)."""
     return Rotation.from_rotvec(omega).as_matrix()
 
@@ -186,13 +190,13 @@ class FrameDriver(VectorEffect):
         n = q.shape[0]
         home = _per_pose(geometry.home, n)
         if self.frame == "tool":
-            R = _skew_rotation(self.tool_rotation(q, ctx))
+            R = _rotations(self.tool_rotation(q, ctx))
             hinge = np.broadcast_to(self._p[2] * Z, (n, 3))
             return geometry.replaced(home=home @ _about(R, hinge))
         dirs = _per_pose(geometry.axis_dirs, n)
         points = _per_pose(geometry.axis_points, n)
         if self.frame == "base":
-            R = _skew_rotation(self.base_rotation(q, ctx))
+            R = _rotations(self.base_rotation(q, ctx))
             pivot = np.broadcast_to(-self._p[-1] * Z, (n, 3))
             B = _about(R, pivot)
             return geometry.replaced(
