@@ -170,6 +170,10 @@ def test_frame_effects_say_where_and_what_drives_them():
                            "perpendicular to its axis")
     assert "150.0 ± 10.0 µrad/N·m" in text and "400 ± 50 µrad under its own weight" in text
     assert "µm/N" in text
+    tool.set_params(np.array([4e-4, 0.0, 0.0]))
+    tool.uncertainty = np.array([5e-5, 0.0, 3.0])
+    assert tool.sentence().endswith(": 400 ± 50 µrad with the tool held horizontal (54 µm at "
+                                    "the target ball); the payload did not vary")
     assert base.sentence().startswith("the base tilts with the overturning moment")
     assert "0.300 µrad/N·m" in base.sentence()
     assert link.sentence() == ("link 3 (joint 3 to joint 4) grows with the temperature (along "
@@ -177,3 +181,24 @@ def test_frame_effects_say_where_and_what_drives_them():
     data = MeasuredPoints(_poses(5), np.zeros((5, 3)), _context(5), BALL)
     assert exposing_feature(base, data).label == "payload (kg)"
     assert exposing_feature(link, data).label == "temperature (°C)"
+
+
+def test_frame_effects_leave_every_other_draw_of_the_simulator_unchanged():
+    # their parameters come from a stream of their own: a session with them switched on
+    # has the same per-joint errors, other effects and tracker pose as without
+    others = ("joint_compliance", "backlash", "wrist_compliance", "encoder_thermal")
+    for seed in (1, 7):
+        plain = VirtualRobot.create(seed=seed, effects=others)
+        more = VirtualRobot.create(seed=seed, effects=(*others, "tool_bending", "base_tilt",
+                                                       "link_thermal"))
+        a, b = plain.truth(), more.truth()
+        for key in ("tool_bending", "base_tilt", "link_thermal"):
+            assert key in b["errors"] and key not in a["errors"]
+            del b["errors"][key]
+        b["errors"]["effects"] = [e for e in b["errors"]["effects"] if e in others]
+        assert a == b
+        round_trip = VirtualRobot.from_truth(more.truth())
+        q = _poses(5, seed)
+        run = RunConditions(payload_kg=np.full(5, 4.0), temp_c=np.full(5, 30.0))
+        np.testing.assert_array_equal(round_trip.ball_positions(q, run),
+                                      more.ball_positions(q, run))

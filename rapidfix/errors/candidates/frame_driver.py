@@ -242,6 +242,10 @@ class FrameDriver(VectorEffect):
         if self.frame == "tool":
             ball = np.linalg.norm(self.payload_point_mm - p[2] * Z) * 1e-3  # m from the hinge
             per_n = f"{abs(p[1]) * ball * ball * 1e6:.2f} µm/N"  # across the axis, at the ball
+            if p[1] == 0.0 and (sd is None or sd[1] == 0.0):  # the payload never varied
+                return (f"{self.what()}: {pm(0, 1e6, '.0f')} µrad with the tool held "
+                        f"horizontal ({abs(p[0]) * ball * 1e6:.0f} µm at the target ball); "
+                        "the payload did not vary")
             return (f"{self.what()}: {pm(1, 1e6, '.1f')} µrad/N·m of moment ({per_n} of "
                     f"payload weight at the target ball), {pm(0, 1e6, '.0f')} µrad under "
                     f"its own weight held horizontal, hinge {p[2]:.0f} mm along the axis")
