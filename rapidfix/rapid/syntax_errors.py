@@ -82,9 +82,13 @@ def _after_module(text: str) -> bool:
     return re.search(r"\bENDMODULE\b", text, re.IGNORECASE) is not None
 
 
+# A word (letters of ISO 8859-1 included, as in names) or one other character.
+_WORD = re.compile(r"[A-Za-z0-9_.\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff]+|\S")
+
+
 def _snippet(text: str, offset: int) -> str:
     """The offending text at `offset`: one word or one character."""
-    match = re.compile(r"[A-Za-z0-9_.]+|\S").match(text, offset)
+    match = _WORD.match(text, offset)
     return match.group(0) if match else text[offset:offset + 1]
 
 

@@ -185,6 +185,12 @@ MIXED = {
     "compact IF and assignments": routine(
         "IF a MoveL p1, v100, z1, tool0;", "x := 1;", "IF a Foo;", "Foo;", '%"name"% 1;'
     ),
+    "ISO 8859-1 letters in names": module(
+        f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
+        "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
+        "  MoveL Offs(Año,0,0,ß),v100,z1,tool0\\WObj:=mesaÉ;", "  Ünter;", "  MoveL p1,v1,z1,t;",
+        "  Foo \\Ø;", "  Bar;", "ENDPROC",
+    ),
 }
 
 
@@ -309,6 +315,8 @@ PIECES = [
     "Foo; ! x;\nBar;",
     "Foo ;;",
     "Bar",
+    "MoveL pÑ,v100,z1,tool0;",
+    "Foo Añ, ñ \\Ø:=é;",
 ]
 DATA = [
     f"CONST robtarget p:={TARGET};",
