@@ -2,7 +2,9 @@
 
 `file:line:col: unexpected 'X'; expected one of ...`, with terminal names in
 words a RAPID programmer knows, plus clear messages for RobotStudio's
-placeholders (`<SMT>`, `<EXP>`, ...) and for text after the last ENDMODULE.
+placeholders (`<SMT>`, `<EXP>`, ...) where their kind cannot stand, and for text
+after the last ENDMODULE. (Where it can stand, a placeholder is RAPID: see
+rapid.lark.)
 """
 
 from __future__ import annotations
@@ -42,6 +44,8 @@ def describe_terminal(name: str) -> str | None:
     """A terminal name in words: 'NAME' -> 'a name', 'SEMI' -> "';'"."""
     if name in _WORDS:
         return _WORDS[name]
+    if name.startswith("PH_"):  # placeholders are not offered as what to write
+        return None
     literal = terminal_patterns().get(name)
     if literal is not None:
         return f"'{literal.upper()}'" if literal.isalpha() else f"'{literal}'"
@@ -66,14 +70,25 @@ def describe_expected(names: set[str] | frozenset[str]) -> str:
     return "expected one of " + ", ".join(shown) + more
 
 
-def find_placeholder(source: SourceText, before: int) -> tuple[int, str] | None:
-    """The first RobotStudio placeholder such as <SMT> at or before offset `before`."""
+#: the placeholders RAPID knows (rapid.lark takes each where its kind belongs)
+PLACEHOLDERS = frozenset({"<ALT>", "<ARG>", "<CSE>", "<DDN>", "<DIM>", "<EIT>", "<EXP>", "<ID>",
+                          "<PAR>", "<RDN>", "<SMT>", "<TDN>", "<VAR>"})
+
+
+def find_placeholder(source: SourceText, at: int) -> tuple[int, str] | None:
+    """The RobotStudio placeholder such as <SMT> that offset `at` falls in, if any.
+
+    A syntax error inside a placeholder's text (at its `<`, or at the `>` of
+    `a <EXP> THEN`, which the lexer reads as `a < EXP >`) means that placeholder
+    stands where its kind cannot.
+    """
     text = source.text
-    limit = source.line_end(min(before, len(text)))
-    for match in _PLACEHOLDER_SCAN.finditer(text, 0, limit):
-        token = match.group(0)
-        if token.startswith("<"):
-            return match.start(), token
+    line_start = text.rfind("\n", 0, at) + 1
+    for match in _PLACEHOLDER_SCAN.finditer(text, line_start, source.line_end(at)):
+        if match.start() > at:
+            break
+        if match.group(0).startswith("<") and at < match.end():
+            return match.start(), match.group(0)
     return None
 
 
@@ -134,8 +149,10 @@ def translate(err: UnexpectedInput, source: SourceText,
     if placeholder is not None:
         where, token = placeholder
         line, column = source.line_column(where)
+        what = ("RobotStudio placeholder {} cannot stand here" if token in PLACEHOLDERS
+                else "unknown placeholder {}").format(token)
         return RapidSyntaxError(
-            f"unfinished code: RobotStudio placeholder {token} must be replaced",
+            f"{what} (unfinished code: replace it)",
             file=source.filename, line=line, column=column,
         )
     line, column = source.line_column(offset)

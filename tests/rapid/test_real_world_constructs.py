@@ -61,3 +61,103 @@ def test_signs_of_iso_8859_1_are_not_letters(sign):
     with pytest.raises(RapidSyntaxError) as caught:
         parse_program(f"MODULE M\n  VAR num a{sign}b;\nENDMODULE\n", "signs.mod")
     assert (caught.value.line, caught.value.column) == (2, 12)
+
+
+# ---------------------------------------------------------------- placeholders
+# RobotStudio writes placeholders for code not yet written; the RAPID manual
+# counts a program holding them as syntactically correct (the controller loads
+# it, and stops with an error only where it meets one). Such programs are
+# checked and compensated; each placeholder stays where and as it is.
+PLACEHOLDER_MODULE = "\n".join([
+    "MODULE Unfinished",
+    "  <TDN>",
+    "  <DDN>",
+    f"  CONST robtarget pA:={TARGET};",
+    "  PROC main()",
+    "    <DDN>",
+    "    VAR num a{<DIM>};",
+    "    <SMT>",
+    "    MoveL pA, v100, fine, tool0;",
+    "    MoveL <ARG>, v100, fine, tool0;",
+    "    MoveJ <EXP>, v100, fine, tool0 \\WObj:=wobj0;",
+    "    <VAR> := Offs(pA, 0, 0, <EXP>);",
+    "    IF a{1} = 1 THEN",
+    "      <SMT>",
+    "    <EIT>",
+    "    ELSE",
+    "      MoveL Offs(pA, 10, 0, 0), v100, fine, tool0;",
+    "    ENDIF",
+    "    TEST a{1}",
+    "    <CSE>",
+    "    CASE 2:",
+    "      <ID>;",
+    "    ENDTEST",
+    "  ENDPROC",
+    "  PROC move(<PAR> \\<ALT> | num b)",
+    "    <SMT>",
+    "  ENDPROC",
+    "  <RDN>",
+    "ENDMODULE",
+    "",
+])
+
+
+def _line_column(text: str, needle: str, occurrence: int = 0) -> tuple[int, int]:
+    at = -1
+    for _ in range(occurrence + 1):
+        at = text.index(needle, at + 1)
+    before = text[:at]
+    return before.count("\n") + 1, at - before.rfind("\n")
+
+
+def test_placeholders_stand_where_their_kind_belongs():
+    from rapidfix.rapid import syntax as s
+
+    program = parse_program(PLACEHOLDER_MODULE, "unfinished.mod")
+    module = program.syntax.modules[0]
+    items = [i.text for i in module.items if isinstance(i, s.Placeholder)]
+    assert items == ["<TDN>", "<DDN>", "<RDN>"]
+    main_routine, move = (i for i in module.items if isinstance(i, s.Routine))
+    statements = [st for st, _ in s.walk_statements(main_routine.body)]
+    kinds = [st.text for st in statements if isinstance(st, s.StatementPlaceholder)]
+    assert kinds == ["<DDN>", "<SMT>", "<SMT>", "<EIT>"]
+    test = next(st for st in statements if isinstance(st, s.Test))
+    (placeholder_values, placeholder_body), (values, _) = test.cases
+    assert [v.text for v in placeholder_values] == ["<CSE>"] and placeholder_body == []
+    assert values[0].value == 2
+    assert [p.name for p in move.parameters] == ["<PAR>", "<ALT>", "b"]
+    assert move.parameters[1].optional and move.parameters[1].alternatives == ("<ALT>", "b")
+    # every placeholder node spans exactly its text
+    for node in (*module.items[:2], *(st for st in statements if hasattr(st, "text"))):
+        assert PLACEHOLDER_MODULE[node.start:node.end] == node.text
+
+
+def test_targets_beside_placeholders_are_resolved_and_placeholders_are_not():
+    program = parse_program(PLACEHOLDER_MODULE, "unfinished.mod")
+    by_text = {m.target.text: m for m in program.motions}
+    assert by_text["pA"].target.static
+    assert by_text["pA"].target.data.trans == (400.0, -50.5, 300.0)
+    assert by_text["Offs(pA, 10, 0, 0)"].target.data.trans == (410.0, -50.5, 300.0)
+    for text in ("<ARG>", "<EXP>"):
+        target = by_text[text].target
+        assert not target.static
+        assert f"placeholder {text}" in target.reason
+        assert _line_column(PLACEHOLDER_MODULE, f" {text},")[0] == by_text[text].span.line
+
+
+def test_a_program_with_placeholders_is_checked_ok_and_kept_byte_for_byte(tmp_path, capsys):
+    from rapidfix.rapid.edit import Editor
+
+    path = tmp_path / "unfinished.mod"
+    data = PLACEHOLDER_MODULE.replace("\n", "\r\n").encode("utf-8")
+    path.write_bytes(data)
+    assert main(["check", str(path)]) == 0
+    assert "4 motion instructions" in capsys.readouterr().out
+    program = parse_program(data, str(path))
+    assert program.to_bytes() == data
+    move = next(m for m in program.motions if m.target.text == "pA")
+    editor = Editor(program)
+    editor.replace_statement(move, "MoveAbsJ jA, v100, fine, tool0;")
+    rendered = editor.render()
+    assert rendered == data.replace(b"MoveL pA, v100, fine, tool0;",
+                                    b"MoveAbsJ jA, v100, fine, tool0;")
