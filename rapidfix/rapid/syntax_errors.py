@@ -166,7 +166,10 @@ def translate(err: UnexpectedInput, source: SourceText,
             expected = set()
             message = "unterminated string (a string ends on the line where it starts)"
         if expected and expected <= {"MODULE", "PRG_HEADER", "$END"}:
-            if _after_module(text[:offset]):
+            if text.startswith("%%%", offset) and "%%%" not in text[offset + 3:]:
+                expected = set()
+                message = "unclosed %%% header (a .prg header ends with a second %%% line)"
+            elif _after_module(text[:offset]):
                 message = f"text after the last ENDMODULE: {shown!r}"
             else:
                 message = f"unexpected {shown!r}: a RAPID file starts with MODULE"

@@ -161,3 +161,13 @@ def test_a_program_with_placeholders_is_checked_ok_and_kept_byte_for_byte(tmp_pa
     rendered = editor.render()
     assert rendered == data.replace(b"MoveL pA, v100, fine, tool0;",
                                     b"MoveAbsJ jA, v100, fine, tool0;")
+
+
+# ---------------------------------------------------------------- .prg headers
+def test_an_unclosed_prg_header_is_named_as_such():
+    with pytest.raises(RapidSyntaxError) as caught:
+        parse_program("%%%\n  VERSION:1\n  LANGUAGE:ENGLISH\nMODULE M\nENDMODULE\n", "open.prg")
+    assert (caught.value.line, caught.value.column) == (1, 1)
+    assert caught.value.message.startswith("unclosed %%% header")
+    # closed, the same text is a program
+    parse_program("%%%\n  VERSION:1\n  LANGUAGE:ENGLISH\n%%%\nMODULE M\nENDMODULE\n", "closed.prg")
