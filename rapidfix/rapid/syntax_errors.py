@@ -75,6 +75,13 @@ PLACEHOLDERS = frozenset({"<ALT>", "<ARG>", "<CSE>", "<DDN>", "<DIM>", "<EIT>", 
                           "<PAR>", "<RDN>", "<SMT>", "<TDN>", "<VAR>"})
 
 
+def placeholders_in(text: str) -> list[tuple[int, str]]:
+    """(offset, text) of every placeholder outside strings and comments, in order.
+    In a program that parsed each is one RAPID takes (rapid.lark)."""
+    return [(m.start(), m.group(0)) for m in _PLACEHOLDER_SCAN.finditer(text)
+            if m.group(0).startswith("<") and m.group(0) in PLACEHOLDERS]
+
+
 def find_placeholder(source: SourceText, at: int) -> tuple[int, str] | None:
     """The RobotStudio placeholder such as <SMT> that offset `at` falls in, if any.
 

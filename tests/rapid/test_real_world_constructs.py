@@ -152,7 +152,13 @@ def test_a_program_with_placeholders_is_checked_ok_and_kept_byte_for_byte(tmp_pa
     data = PLACEHOLDER_MODULE.replace("\n", "\r\n").encode("utf-8")
     path.write_bytes(data)
     assert main(["check", str(path)]) == 0
-    assert "4 motion instructions" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    # check says the program is unfinished, and where the first placeholder stands
+    count = sum(PLACEHOLDER_MODULE.count(p) for p in (
+        "<TDN>", "<DDN>", "<DIM>", "<SMT>", "<ARG>", "<EXP>", "<VAR>", "<EIT>", "<CSE>",
+        "<ID>", "<PAR>", "<ALT>", "<RDN>"))
+    assert f"4 motion instructions, {count} placeholders (code not yet written, " \
+           f"the first <TDN> at {_line_column(PLACEHOLDER_MODULE, '<TDN>')[0]}:3)" in out
     program = parse_program(data, str(path))
     assert program.to_bytes() == data
     move = next(m for m in program.motions if m.target.text == "pA")
