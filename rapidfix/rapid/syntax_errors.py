@@ -104,6 +104,9 @@ def _after_module(text: str) -> bool:
     return re.search(r"\bENDMODULE\b", text, re.IGNORECASE) is not None
 
 
+# A number as RAPID writes it (rapid.lark's NUMBER), to tell `1_T_ROB2` from `1.5`.
+_NUMBER_TEXT = re.compile(r"0[xX][0-9a-fA-F]+|0[bB][01]+|0[oO][0-7]+"
+                          r"|(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 # A word (letters of ISO 8859-1 included, as in names) or one other character.
 _WORD = re.compile(r"[A-Za-z0-9_.\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff]+|\S")
 
@@ -169,6 +172,12 @@ def translate(err: UnexpectedInput, source: SourceText,
     else:
         shown = found if len(found) <= 40 else found[:37] + "..."
         message = f"unexpected {shown!r}"
+        word = _WORD.match(text, offset)
+        if ("NAME" in expected and word and word.group(0)[0].isdigit()
+                and not _NUMBER_TEXT.fullmatch(word.group(0))):
+            # `MODULE 1_T_ROB2`: the lexer saw the number 1; say what is wrong
+            shown = word.group(0) if len(word.group(0)) <= 40 else word.group(0)[:37] + "..."
+            message = f"{shown!r} is not a name (a RAPID name starts with a letter)"
         if isinstance(err, UnexpectedCharacters) and found == '"':
             expected = set()
             message = "unterminated string (a string ends on the line where it starts)"

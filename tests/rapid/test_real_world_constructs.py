@@ -177,3 +177,22 @@ def test_an_unclosed_prg_header_is_named_as_such():
     assert caught.value.message.startswith("unclosed %%% header")
     # closed, the same text is a program
     parse_program("%%%\n  VERSION:1\n  LANGUAGE:ENGLISH\n%%%\nMODULE M\nENDMODULE\n", "closed.prg")
+
+
+# ---------------------------------------------------------------- names
+@pytest.mark.parametrize("text,line,column,word", [
+    ("MODULE 1_T_ROB2\nENDMODULE\n", 1, 8, "1_T_ROB2"),
+    ("MODULE M\n  VAR num 2nd := 1;\nENDMODULE\n", 2, 11, "2nd"),
+    ("MODULE M\n  PROC 3D_print()\n  ENDPROC\nENDMODULE\n", 2, 8, "3D_print"),
+])
+def test_a_name_that_starts_with_a_digit_is_named_in_the_error(text, line, column, word):
+    with pytest.raises(RapidSyntaxError) as caught:
+        parse_program(text, "digits.mod")
+    assert (caught.value.line, caught.value.column) == (line, column)
+    assert caught.value.message.startswith(f"{word!r} is not a name (a RAPID name starts with")
+
+
+def test_a_number_where_a_name_belongs_keeps_the_plain_message():
+    with pytest.raises(RapidSyntaxError) as caught:
+        parse_program("MODULE M\n  VAR num 1.5;\nENDMODULE\n", "number.mod")
+    assert caught.value.message.startswith("unexpected '1.5'")
