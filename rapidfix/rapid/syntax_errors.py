@@ -178,6 +178,7 @@ def translate(err: UnexpectedInput, source: SourceText,
             # `MODULE 1_T_ROB2`: the lexer saw the number 1; say what is wrong
             shown = word.group(0) if len(word.group(0)) <= 40 else word.group(0)[:37] + "..."
             message = f"{shown!r} is not a name (a RAPID name starts with a letter)"
+            expected = set()
         if isinstance(err, UnexpectedCharacters) and found == '"':
             expected = set()
             message = "unterminated string (a string ends on the line where it starts)"

@@ -189,7 +189,7 @@ def test_a_name_that_starts_with_a_digit_is_named_in_the_error(text, line, colum
     with pytest.raises(RapidSyntaxError) as caught:
         parse_program(text, "digits.mod")
     assert (caught.value.line, caught.value.column) == (line, column)
-    assert caught.value.message.startswith(f"{word!r} is not a name (a RAPID name starts with")
+    assert caught.value.message == f"{word!r} is not a name (a RAPID name starts with a letter)"
 
 
 def test_a_number_where_a_name_belongs_keeps_the_plain_message():
