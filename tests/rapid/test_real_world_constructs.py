@@ -196,3 +196,45 @@ def test_a_number_where_a_name_belongs_keeps_the_plain_message():
     with pytest.raises(RapidSyntaxError) as caught:
         parse_program("MODULE M\n  VAR num 1.5;\nENDMODULE\n", "number.mod")
     assert caught.value.message.startswith("unexpected '1.5'")
+
+
+# ---------------------------------------------------------------- arc welding
+# Since RobotWare 6 the weave of ArcL/ArcC/... is the optional argument \Weave;
+# before, it was a required argument between Weld and Zone. Every arc welding
+# call of the corpus (815) is of the newer form; both are read.
+ARC_MODULE = "\n".join([
+    "MODULE Weld",
+    "  PERS tooldata tWeld:=[TRUE,[[0,0,400],[1,0,0,0]],[2,[0,0,100],[1,0,0,0],0,0,0]];",
+    f"  CONST robtarget p1:={TARGET};",
+    f"  CONST robtarget p2:={TARGET};",
+    "  PROC main()",
+    "    ArcLStart p1, v100, seam1, weld1 \\Weave:=weave1, fine, tWeld \\WObj:=wobj0;",
+    "    ArcL p2, v100, seam1, weld1, z1, tWeld;",
+    "    ArcL p1, v100, seam1, weld1, z1, tWeld;",
+    "    ArcL p2, v100, seam1, weld1, weave1, z5, tWeld;",
+    "    ArcC p1, p2, v100, seam1, weld1 \\Weave:=weave1, z10, tWeld;",
+    "    ArcCEnd p1, p2, v100, seam1, weld1, weave1, fine, tWeld;",
+    "    ArcLEnd p2, v100, seam1, weld1, fine, tWeld;",
+    "  ENDPROC",
+    "ENDMODULE",
+    "",
+])
+
+
+def test_arc_welding_moves_with_and_without_a_required_weave_find_zone_and_tool():
+    program = parse_program(ARC_MODULE, "weld.mod")
+    rows = [(m.name, m.zone.text, m.tool.text, m.optional.get("weave") is not None,
+             m.arguments.get("weave") is not None) for m in program.motions]
+    assert rows == [
+        ("ArcLStart", "fine", "tWeld", True, False),
+        ("ArcL", "z1", "tWeld", False, False),
+        ("ArcL", "z1", "tWeld", False, False),
+        ("ArcL", "z5", "tWeld", False, True),   # the older form: weave required
+        ("ArcC", "z10", "tWeld", True, False),
+        ("ArcCEnd", "fine", "tWeld", False, True),
+        ("ArcLEnd", "fine", "tWeld", False, False),
+    ]
+    for move in program.motions:
+        assert move.tool.static and move.tool.data.tframe.trans == (0.0, 0.0, 400.0)
+        assert [t.text for t in move.targets] == (["p1", "p2"] if "C" in move.name[3:]
+                                                  else [move.target.text])
