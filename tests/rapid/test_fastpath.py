@@ -190,8 +190,8 @@ MIXED = {
         "  MoveL p1,v100,z1,tool0;", "  <SMT>", "  MoveL p2,v100,z1,tool0;", "  <DDN>",
         "  MoveL <ARG>,v100,z1,tool0;", "  MoveL p3,v100,z1,tool0;", "  Foo <EXP>, <ID>;",
         "  <VAR> := 1;", "  Bar;", "  IF a THEN", "    Foo;", "  <EIT>", "  ENDIF",
-        "  TEST a", "  <CSE>", "  ENDTEST", "ENDPROC", "PROC p(<PAR>, \\<ALT>)", "ENDPROC",
-        "<RDN>",
+        "  IF a <SMT>", "  TEST a", "  <CSE>", "  ENDTEST", "ENDPROC",
+        "PROC p(<PAR>, \\<ALT>)", "ENDPROC", "<RDN>",
     ),
     "ISO 8859-1 letters in names": module(
         f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",

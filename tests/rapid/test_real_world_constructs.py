@@ -87,6 +87,7 @@ PLACEHOLDER_MODULE = "\n".join([
     "    ELSE",
     "      MoveL Offs(pA, 10, 0, 0), v100, fine, tool0;",
     "    ENDIF",
+    "    IF a{1} = 2 <SMT>",
     "    TEST a{1}",
     "    <CSE>",
     "    CASE 2:",
@@ -120,7 +121,9 @@ def test_placeholders_stand_where_their_kind_belongs():
     main_routine, move = (i for i in module.items if isinstance(i, s.Routine))
     statements = [st for st, _ in s.walk_statements(main_routine.body)]
     kinds = [st.text for st in statements if isinstance(st, s.StatementPlaceholder)]
-    assert kinds == ["<DDN>", "<SMT>", "<SMT>", "<EIT>"]
+    assert kinds == ["<DDN>", "<SMT>", "<SMT>", "<EIT>", "<SMT>"]
+    compact = next(st for st in statements if isinstance(st, s.CompactIf))
+    assert compact.statement.text == "<SMT>"
     test = next(st for st in statements if isinstance(st, s.Test))
     (placeholder_values, placeholder_body), (values, _) = test.cases
     assert [v.text for v in placeholder_values] == ["<CSE>"] and placeholder_body == []
