@@ -6,7 +6,8 @@ import argparse
 import sys
 
 from rapidfix.exceptions import RapidfixError
-from rapidfix.rapid import load_program
+from rapidfix.rapid import Program, load_program
+from rapidfix.rapid.syntax_errors import placeholders_in
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -41,7 +42,22 @@ def run(args: argparse.Namespace) -> int:
             modules = ", ".join(m.name for m in program.modules)
             print(f"{name}: ok ({len(program.text.splitlines())} lines, module {modules}, "
                   f"{len(program.declarations)} declarations, "
-                  f"{len(program.motions)} motion instructions)")
+                  f"{len(program.motions)} motion instructions{_placeholders(program)})")
     if len(args.files) > 1 and not args.quiet:
         print(f"{len(args.files) - failed} of {len(args.files)} files parsed")
     return 1 if failed else 0
+
+
+def _placeholders(program: Program) -> str:
+    """', N placeholders (code not yet written, the first <SMT> at 12:5)', or ''.
+
+    RobotStudio's placeholders are RAPID (the controller loads the program) but
+    the program stops with an error where it meets one: say so.
+    """
+    found = placeholders_in(program.text)
+    if not found:
+        return ""
+    offset, text = found[0]
+    where = program.span(offset, offset + len(text))
+    count = f"{len(found)} placeholder{'s' if len(found) > 1 else ''}"
+    return f", {count} (code not yet written, the first {text} at {where.line}:{where.column})"

@@ -79,6 +79,8 @@ class Evaluator:
             return self._index(expr)
         if isinstance(expr, s.Call):
             return self._call(expr)
+        if isinstance(expr, s.Placeholder):
+            raise NotConstant(f"placeholder {expr.text}: code not yet written")
         raise NotConstant(f"cannot evaluate {type(expr).__name__}")  # pragma: no cover
 
     # ------------------------------------------------------------ operators

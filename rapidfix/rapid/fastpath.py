@@ -52,7 +52,11 @@ _WS = r"[ \t\f\v\r\n\x1a]"
 # (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
 # cut short on backtracking, so nothing inside it is ever read as a statement).
 _GAP = rf"{_WS}*(?:![^\n]*\n{_WS}*)*"
-_WORD_END = r"(?![A-Za-z0-9_])"
+# The letters of ISO 8859-1 beyond a-z that RAPID names may hold (as rapid.lark's NAME).
+# The fast names below are ASCII only; a name holding one of these letters ends
+# no fast name (_WORD_END), so its statement is left to the plain grammar.
+_LATIN1_LETTERS = r"\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+_WORD_END = rf"(?![A-Za-z0-9_{_LATIN1_LETTERS}])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
 # for speed; its numbers are checked when they are read (_number_group). Runs of
 # number characters are taken whole (one step of the regex engine, not one per
@@ -104,7 +108,10 @@ def _name(excluded: list[str]) -> str:
 def _patterns() -> dict[str, str]:
     """Regular expressions of the fast terminals."""
     terminals = {t.name: t for t in diagnosis_parser().terminals}
-    if terminals["NAME"].pattern.to_regexp() != "(?i:[a-z][a-z0-9_]*)":  # pragma: no cover
+    latin1 = "\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+    # (the placeholder <ID> is a name too; fast names never take it)
+    expected_name = f"(?i:[a-z{latin1}][a-z0-9_{latin1}]*|<ID>)"
+    if terminals["NAME"].pattern.to_regexp() != expected_name:  # pragma: no cover
         raise ValueError("rapid.lark's NAME changed; update rapidfix.rapid.fastpath")
     call_name = _name(list(_keywords().values()))
     plain_name = _name(_keywords_after("MODULE m\nPROC p()\nx \\"))

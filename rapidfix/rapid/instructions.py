@@ -4,11 +4,18 @@ A parameter named ToPoint or CirPoint is a robtarget; ToJointPos is a
 jointtarget; Speed, Zone and Tool have their usual roles; the work object is
 always the optional argument `\\WObj`. To support another instruction, add a
 line to `_TABLE` (names as in ABB's technical reference manual).
+
+A parameter in brackets was required in an older RobotWare and is optional
+since: arc welding's Weave is written `\\Weave:=w` in RobotWare 6 and later
+(`ArcL p, v100, seam, weld \\Weave:=w, z1, tWeld;`) and as a required argument
+after Weld before (`ArcL p, v100, seam, weld, w, z1, tWeld;`). A call with one
+required argument more than the table's short form is read with the long one
+(MotionSpec.legacy).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 _TABLE = """
@@ -38,12 +45,12 @@ TriggJIOs   ToPoint Speed Zone Tool
 SearchL     Signal SearchPoint ToPoint Speed Tool
 SearchC     Signal SearchPoint CirPoint ToPoint Speed Tool
 SearchExtJ  Signal SearchJointPos ToJointPos Speed
-ArcL        ToPoint Speed Seam Weld Weave Zone Tool
-ArcC        CirPoint ToPoint Speed Seam Weld Weave Zone Tool
-ArcLStart   ToPoint Speed Seam Weld Weave Zone Tool
-ArcLEnd     ToPoint Speed Seam Weld Weave Zone Tool
-ArcCStart   CirPoint ToPoint Speed Seam Weld Weave Zone Tool
-ArcCEnd     CirPoint ToPoint Speed Seam Weld Weave Zone Tool
+ArcL        ToPoint Speed Seam Weld [Weave] Zone Tool
+ArcC        CirPoint ToPoint Speed Seam Weld [Weave] Zone Tool
+ArcLStart   ToPoint Speed Seam Weld [Weave] Zone Tool
+ArcLEnd     ToPoint Speed Seam Weld [Weave] Zone Tool
+ArcCStart   CirPoint ToPoint Speed Seam Weld [Weave] Zone Tool
+ArcCEnd     CirPoint ToPoint Speed Seam Weld [Weave] Zone Tool
 CapL        ToPoint Speed Cdata Weavestart Weave Zone Tool
 CapC        CirPoint ToPoint Speed Cdata Weavestart Weave Zone Tool
 PaintL      ToPoint Speed Zone Tool
@@ -78,10 +85,22 @@ RUNTIME_FUNCTIONS = frozenset({
 
 @dataclass(frozen=True)
 class MotionSpec:
-    """One motion instruction: its name and its required parameters in order."""
+    """One motion instruction: its name and its required parameters in order.
+
+    `legacy` is the same instruction with the required parameters of an older
+    RobotWare (one more: see the module's docstring), or None.
+    """
 
     name: str
     parameters: tuple[str, ...]
+    legacy: MotionSpec | None = field(default=None, compare=False)
+
+    def for_call(self, required: int) -> MotionSpec:
+        """The form of this instruction a call with `required` required arguments uses."""
+        legacy = self.legacy
+        if legacy is not None and required == len(legacy.parameters):
+            return legacy
+        return self
 
     # The derived attributes are cached: they are asked for once per move of a
     # program (a frozen dataclass still has an instance dict for cached_property).
@@ -115,7 +134,11 @@ def _load(table: str) -> dict[str, MotionSpec]:
     specs = {}
     for line in table.strip().splitlines():
         name, *params = line.split()
-        specs[name.lower()] = MotionSpec(name, tuple(params))
+        short = tuple(p for p in params if not p.startswith("["))
+        legacy = None
+        if len(short) != len(params):
+            legacy = MotionSpec(name, tuple(p.strip("[]") for p in params))
+        specs[name.lower()] = MotionSpec(name, short, legacy)
     return specs
 
 

@@ -467,16 +467,19 @@ class ModelBuilder:
         # type hint, operand cache: data name as spelt -> what an Operand of it holds),
         # and id(call tail) -> what its moves share (None: nothing); the calls keep
         # their tails alive while this runs, so an id is not reused
-        layouts: dict[tuple[str, str, str], tuple[_Layout, dict[int, _SharedTail | None]]] = {}
+        layouts: dict[tuple[MotionSpec, str, str],
+                      tuple[_Layout, dict[int, _SharedTail | None]]] = {}
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
         for call, spec, module, routine, in_loop in self.pending:
+            if spec.legacy is not None:  # arc welding: Weave required (old) or optional
+                spec = spec.for_call(sum(a.kind == "required" for a in call.args))
             if spec is not last[0] or routine is not last[1] or module is not last[2]:
                 rkey = routine.lower()
-                found = layouts.get((spec.name, module, rkey))
+                found = layouts.get((spec, module, rkey))
                 if found is None:
-                    found = layouts[(spec.name, module, rkey)] = (tuple(
+                    found = layouts[(spec, module, rkey)] = (tuple(
                         (key, role_types.get(key),
                          caches.setdefault((module, rkey, role_types.get(key)), {}))
                         for key in (p.lower() for p in spec.parameters)), {})

@@ -102,9 +102,18 @@ class Paren(Node):
     inner: Expr
 
 
+@dataclass(slots=True, eq=False)
+class Placeholder(Node):
+    """A RobotStudio placeholder (`<EXP>`, `<VAR>`, `<ARG>`, `<DIM>`, or a module item
+    `<TDN>`, `<DDN>`, `<RDN>`): code not yet written, which the controller loads but
+    stops at with an error. Its value is never known before run time."""
+
+    text: str  # as written, '<EXP>'
+
+
 Expr = (
     Number | String | Bool | NumericAggregate | Aggregate | NameRef | Index | Component
-    | Call | Unary | Binary | Paren
+    | Call | Unary | Binary | Paren | Placeholder
 )
 
 
@@ -291,6 +300,14 @@ class Connect(Statement):
     trap: str
 
 
+@dataclass(slots=True, eq=False)
+class StatementPlaceholder(Statement):
+    """`<SMT>` (a statement), `<DDN>` (a routine's data) or `<EIT>` (an ELSEIF clause)
+    not yet written: the controller stops there with an error."""
+
+    text: str  # as written, '<SMT>'
+
+
 # ---------------------------------------------------------------- declarations
 @dataclass(slots=True, eq=False)
 class DataDecl(Node):
@@ -375,7 +392,7 @@ class Routine(Node):
         return self.name.lower()
 
 
-ModuleItem = DataDecl | RecordDecl | AliasDecl | Routine
+ModuleItem = DataDecl | RecordDecl | AliasDecl | Routine | Placeholder
 
 # Statements that hold statement lists (those that define bodies()).
 COMPOUND_STATEMENTS = frozenset({If, CompactIf, For, While, Test})

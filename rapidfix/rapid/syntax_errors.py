@@ -2,7 +2,9 @@
 
 `file:line:col: unexpected 'X'; expected one of ...`, with terminal names in
 words a RAPID programmer knows, plus clear messages for RobotStudio's
-placeholders (`<SMT>`, `<EXP>`, ...) and for text after the last ENDMODULE.
+placeholders (`<SMT>`, `<EXP>`, ...) where their kind cannot stand, and for text
+after the last ENDMODULE. (Where it can stand, a placeholder is RAPID: see
+rapid.lark.)
 """
 
 from __future__ import annotations
@@ -42,6 +44,8 @@ def describe_terminal(name: str) -> str | None:
     """A terminal name in words: 'NAME' -> 'a name', 'SEMI' -> "';'"."""
     if name in _WORDS:
         return _WORDS[name]
+    if name.startswith("PH_"):  # placeholders are not offered as what to write
+        return None
     literal = terminal_patterns().get(name)
     if literal is not None:
         return f"'{literal.upper()}'" if literal.isalpha() else f"'{literal}'"
@@ -66,14 +70,32 @@ def describe_expected(names: set[str] | frozenset[str]) -> str:
     return "expected one of " + ", ".join(shown) + more
 
 
-def find_placeholder(source: SourceText, before: int) -> tuple[int, str] | None:
-    """The first RobotStudio placeholder such as <SMT> at or before offset `before`."""
+#: the placeholders RAPID knows (rapid.lark takes each where its kind belongs)
+PLACEHOLDERS = frozenset({"<ALT>", "<ARG>", "<CSE>", "<DDN>", "<DIM>", "<EIT>", "<EXP>", "<ID>",
+                          "<PAR>", "<RDN>", "<SMT>", "<TDN>", "<VAR>"})
+
+
+def placeholders_in(text: str) -> list[tuple[int, str]]:
+    """(offset, text) of every placeholder outside strings and comments, in order.
+    In a program that parsed each is one RAPID takes (rapid.lark)."""
+    return [(m.start(), m.group(0)) for m in _PLACEHOLDER_SCAN.finditer(text)
+            if m.group(0).startswith("<") and m.group(0) in PLACEHOLDERS]
+
+
+def find_placeholder(source: SourceText, at: int) -> tuple[int, str] | None:
+    """The RobotStudio placeholder such as <SMT> that offset `at` falls in, if any.
+
+    A syntax error inside a placeholder's text (at its `<`, or at the `>` of
+    `a <EXP> THEN`, which the lexer reads as `a < EXP >`) means that placeholder
+    stands where its kind cannot.
+    """
     text = source.text
-    limit = source.line_end(min(before, len(text)))
-    for match in _PLACEHOLDER_SCAN.finditer(text, 0, limit):
-        token = match.group(0)
-        if token.startswith("<"):
-            return match.start(), token
+    line_start = text.rfind("\n", 0, at) + 1
+    for match in _PLACEHOLDER_SCAN.finditer(text, line_start, source.line_end(at)):
+        if match.start() > at:
+            break
+        if match.group(0).startswith("<") and at < match.end():
+            return match.start(), match.group(0)
     return None
 
 
@@ -82,9 +104,16 @@ def _after_module(text: str) -> bool:
     return re.search(r"\bENDMODULE\b", text, re.IGNORECASE) is not None
 
 
+# A number as RAPID writes it (rapid.lark's NUMBER), to tell `1_T_ROB2` from `1.5`.
+_NUMBER_TEXT = re.compile(r"0[xX][0-9a-fA-F]+|0[bB][01]+|0[oO][0-7]+"
+                          r"|(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+# A word (letters of ISO 8859-1 included, as in names) or one other character.
+_WORD = re.compile(r"[A-Za-z0-9_.\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff]+|\S")
+
+
 def _snippet(text: str, offset: int) -> str:
     """The offending text at `offset`: one word or one character."""
-    match = re.compile(r"[A-Za-z0-9_.]+|\S").match(text, offset)
+    match = _WORD.match(text, offset)
     return match.group(0) if match else text[offset:offset + 1]
 
 
@@ -130,8 +159,10 @@ def translate(err: UnexpectedInput, source: SourceText,
     if placeholder is not None:
         where, token = placeholder
         line, column = source.line_column(where)
+        what = ("RobotStudio placeholder {} cannot stand here" if token in PLACEHOLDERS
+                else "unknown placeholder {}").format(token)
         return RapidSyntaxError(
-            f"unfinished code: RobotStudio placeholder {token} must be replaced",
+            f"{what} (unfinished code: replace it)",
             file=source.filename, line=line, column=column,
         )
     line, column = source.line_column(offset)
@@ -141,11 +172,21 @@ def translate(err: UnexpectedInput, source: SourceText,
     else:
         shown = found if len(found) <= 40 else found[:37] + "..."
         message = f"unexpected {shown!r}"
+        word = _WORD.match(text, offset)
+        if ("NAME" in expected and word and word.group(0)[0].isdigit()
+                and not _NUMBER_TEXT.fullmatch(word.group(0))):
+            # `MODULE 1_T_ROB2`: the lexer saw the number 1; say what is wrong
+            shown = word.group(0) if len(word.group(0)) <= 40 else word.group(0)[:37] + "..."
+            message = f"{shown!r} is not a name (a RAPID name starts with a letter)"
+            expected = set()
         if isinstance(err, UnexpectedCharacters) and found == '"':
             expected = set()
             message = "unterminated string (a string ends on the line where it starts)"
         if expected and expected <= {"MODULE", "PRG_HEADER", "$END"}:
-            if _after_module(text[:offset]):
+            if text.startswith("%%%", offset) and "%%%" not in text[offset + 3:]:
+                expected = set()
+                message = "unclosed %%% header (a .prg header ends with a second %%% line)"
+            elif _after_module(text[:offset]):
                 message = f"text after the last ENDMODULE: {shown!r}"
             else:
                 message = f"unexpected {shown!r}: a RAPID file starts with MODULE"

@@ -133,6 +133,27 @@ class SyntaxBuilder(Transformer):
         )
 
     # ------------------------------------------------------------ statements
+    def placeholder(self, tok: Token) -> s.Placeholder:
+        return s.Placeholder(tok.start_pos, tok.end_pos, str(tok))
+
+    dim_placeholder = module_placeholder = placeholder
+
+    def statement_placeholder(self, tok: Token) -> s.StatementPlaceholder:
+        return s.StatementPlaceholder(tok.start_pos, tok.end_pos, str(tok))
+
+    def case_placeholder(self, tok: Token) -> tuple:
+        # a CASE clause not yet written: no values to compare, no statements
+        return ("case", [self.placeholder(tok)], [])
+
+    def argument_placeholder(self, tok: Token) -> s.Argument:
+        return s.Argument(tok.start_pos, tok.end_pos, "required", None, self.placeholder(tok))
+
+    def parameter_placeholder(self, tok: Token) -> s.Parameter:
+        # named and typed by its own text, which no data name can equal
+        return s.Parameter(tok.start_pos, tok.end_pos, None, str(tok), str(tok))
+
+    alternative_placeholder = parameter_placeholder
+
     def assignment(self, target: s.Expr, value: s.Expr, semi: Token) -> s.Assignment:
         return s.Assignment(target.start, semi.end_pos, target, value)
 

@@ -66,5 +66,5 @@ def test_targets_of_bad_file_is_one_line_error(tmp_path, capsys):
     bad.write_text("MODULE M\n<SMT>\nENDMODULE\n")
     assert main(["targets", str(bad)]) == 1
     err = capsys.readouterr().err
-    assert err.strip() == f"rapidfix: error: {bad}:2:1: unfinished code: RobotStudio " \
-                          "placeholder <SMT> must be replaced"
+    assert err.strip() == f"rapidfix: error: {bad}:2:1: RobotStudio placeholder <SMT> " \
+                          "cannot stand here (unfinished code: replace it)"

@@ -43,17 +43,25 @@ def test_unexpected_end_of_file():
     assert "'ENDPROC'" in err.message
 
 
+# Placeholders where their kind may stand are RAPID (tests/rapid/test_real_world_constructs.py);
+# elsewhere they are named as the error.
 @pytest.mark.parametrize("placeholder,line,column", [
-    ("  <SMT>", 3, 3),
-    ("  x := <EXP>;", 3, 8),
+    ("  x := <SMT>;", 3, 8),
     ("  IF a <EXP> THEN ENDIF", 3, 8),
-    ("  MoveL <EXP>, v100, z10, tool0;", 3, 9),
-    ("  Foo <ARG>;", 3, 7),
+    ("  MoveL p1, v100, z10, tool0 <ARG>;", 3, 30),
+    ("  <TDN>", 3, 3),
+    ("  <FOO>;", 3, 3),
 ])
-def test_robotstudio_placeholders(placeholder, line, column):
+def test_robotstudio_placeholders_where_they_cannot_stand(placeholder, line, column):
     err = error_of(f"MODULE M\nPROC main()\n{placeholder}\nENDPROC\nENDMODULE")
     assert (err.line, err.column) == (line, column)
-    assert "placeholder <" in err.message
+    assert "placeholder <" in err.message and "unfinished code" in err.message
+
+
+def test_a_placeholder_that_parsed_is_not_blamed_for_a_later_error():
+    err = error_of("MODULE M\nPROC main()\n  <SMT>\n  x := <EXP>; y := ;\nENDPROC\nENDMODULE")
+    assert (err.line, err.column) == (4, 20)
+    assert "placeholder" not in err.message and "<EXP>" not in err.message
 
 
 def test_placeholder_in_string_or_comment_is_not_reported():

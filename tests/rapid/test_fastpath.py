@@ -185,6 +185,20 @@ MIXED = {
     "compact IF and assignments": routine(
         "IF a MoveL p1, v100, z1, tool0;", "x := 1;", "IF a Foo;", "Foo;", '%"name"% 1;'
     ),
+    "RobotStudio placeholders between simple statements": module(
+        "<TDN>", "CONST num n:=1;", "<DDN>", "VAR num a{<DIM>};", "PROC main()",
+        "  MoveL p1,v100,z1,tool0;", "  <SMT>", "  MoveL p2,v100,z1,tool0;", "  <DDN>",
+        "  MoveL <ARG>,v100,z1,tool0;", "  MoveL p3,v100,z1,tool0;", "  Foo <EXP>, <ID>;",
+        "  <VAR> := 1;", "  Bar;", "  IF a THEN", "    Foo;", "  <EIT>", "  ENDIF",
+        "  IF a <SMT>", "  TEST a", "  <CSE>", "  ENDTEST", "ENDPROC",
+        "PROC p(<PAR>, \\<ALT>)", "ENDPROC", "<RDN>",
+    ),
+    "ISO 8859-1 letters in names": module(
+        f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
+        "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
+        "  MoveL Offs(Año,0,0,ß),v100,z1,tool0\\WObj:=mesaÉ;", "  Ünter;", "  MoveL p1,v1,z1,t;",
+        "  Foo \\Ø;", "  Bar;", "ENDPROC",
+    ),
 }
 
 
@@ -309,6 +323,11 @@ PIECES = [
     "Foo; ! x;\nBar;",
     "Foo ;;",
     "Bar",
+    "MoveL pÑ,v100,z1,tool0;",
+    "Foo Añ, ñ \\Ø:=é;",
+    "<SMT>",
+    "MoveL <ARG>,v1,z1,t;",
+    "Foo <EXP>, <ID>;",
 ]
 DATA = [
     f"CONST robtarget p:={TARGET};",
