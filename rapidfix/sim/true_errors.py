@@ -31,6 +31,14 @@ them by the joint they act on and what drives them):
   joint last moved (a wrist gear train or a dress pack that pulls on the next axis);
 - ``joint_coupling2``: one joint's error follows the second harmonic of another
   joint's angle (an elliptic bearing or gear, twice per turn).
+
+An effect that neither a candidate nor one joint and one driver describes (issue #14,
+section 2: only a smooth correction over several joints can follow it):
+
+- ``hose_pull``: the dress pack pulls on joint 5 as the forearm (joint 4) and the
+  wrist (joint 6) twist it together: A · sin θ4 · sin θ6 (A 0.03–0.05°). The sweeps
+  hold joints 4 and 6 at 0, so no sweep sees it, and its average over either angle
+  alone is about zero, so no function of one joint's angle describes it.
 """
 
 from __future__ import annotations
@@ -53,6 +61,7 @@ EFFECTS: tuple[str, ...] = (
     "encoder_thermal",
     "direction_zero_shift",
     "joint_coupling2",
+    "hose_pull",
 )
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s², base z is up
@@ -125,6 +134,8 @@ class TrueErrors:
     #: source, target (0-based), amp_rad, phase_rad of a second harmonic
     coupling2: dict[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    #: hose_pull: amp_rad (issue #14 section 2; drawn by `draw_hose_pull`)
+    hose: dict[str, float] | None = None
 
     @property
     def effects(self) -> list[str]:
@@ -139,7 +150,8 @@ class TrueErrors:
               "wrist_compliance": self.wrist is not None,
               "encoder_thermal": self.encoder is not None,
               "direction_zero_shift": self.direction_shift is not None,
-              "joint_coupling2": self.coupling2 is not None}
+              "joint_coupling2": self.coupling2 is not None,
+              "hose_pull": self.hose is not None}
         return [name for name in EFFECTS if on[name]]
 
     # ---- drawing ---------------------------------------------------------------------
@@ -153,6 +165,7 @@ class TrueErrors:
             raise ValueError(f"unknown effect(s) {', '.join(unknown)}; "
                              f"known: {', '.join(EFFECTS)}")
         # Draw everything whether used or not, so adding an effect leaves the others unchanged.
+        hose = draw_hose_pull(rng)  # its own stream; `rng` does not advance
         joint = JointErrors.draw(rng)
         compliance = rng.uniform(0.6e-6, 1.5e-6, 2)
         dirs, points, home = _perturbed_geometry(robot, rng)
@@ -207,6 +220,7 @@ class TrueErrors:
             encoder=encoder if "encoder_thermal" in on else None,
             direction_shift=shift if "direction_zero_shift" in on else None,
             coupling2=coupling2 if "joint_coupling2" in on else None,
+            hose=hose if "hose_pull" in on else None,
         )
 
     # ---- evaluation ------------------------------------------------------------------
@@ -234,6 +248,8 @@ class TrueErrors:
             c = self.coupling2
             delta[:, int(c["target"])] += c["amp_rad"] * np.sin(
                 2.0 * q[:, int(c["source"])] + c["phase_rad"])
+        if self.hose is not None:
+            delta[:, 4] += hose_pull(q, self.hose)
         if self.backlash is not None and direction is not None:
             delta -= 0.5 * self.backlash * direction
         if self.direction_shift is not None and direction is not None:
@@ -306,6 +322,9 @@ class TrueErrors:
                                     "target_joint": int(c["target"]) + 1,
                                     "amplitude_deg": float(np.degrees(c["amp_rad"])),
                                     "phase_rad": c["phase_rad"]}
+        if self.hose is not None:
+            d["hose_pull"] = {"joint": 5, "depends_on_joints": [4, 6],
+                              "amplitude_deg": float(np.degrees(self.hose["amp_rad"]))}
         return d
 
     @classmethod
@@ -318,6 +337,7 @@ class TrueErrors:
         enc = d.get("encoder_thermal")
         shift = d.get("direction_zero_shift")
         coup2 = d.get("joint_coupling2")
+        hose = d.get("hose_pull")
         return cls(
             joint=JointErrors.from_dict(d["joint_errors"]),
             compliance=None if comp is None else np.array([comp["j2"], comp["j3"]]),
@@ -342,6 +362,8 @@ class TrueErrors:
                 "source": coup2["source_joint"] - 1, "target": coup2["target_joint"] - 1,
                 "amp_rad": float(np.radians(coup2["amplitude_deg"])),
                 "phase_rad": coup2["phase_rad"]},
+            hose=None if hose is None else {
+                "amp_rad": float(np.radians(hose["amplitude_deg"]))},
         )
 
 
@@ -402,3 +424,20 @@ def torque_about(axis_dir: np.ndarray, axis_point: np.ndarray, positions: np.nda
     lever = (positions - axis_point[:, None, :]) * 1e-3
     force = masses[..., None] * GRAVITY
     return np.einsum("nbi,ni->n", np.cross(lever, force), axis_dir)
+
+
+# ---- hose_pull (issue #14 section 2): a smooth error over two joints -------------------
+
+
+def draw_hose_pull(rng: np.random.Generator) -> dict[str, float]:
+    """The hose's amplitude, from a stream of its own derived from `rng`'s state without
+    advancing it (so every other effect's draws stay as they were for every seed)."""
+    state = rng.bit_generator.state["state"]
+    own = np.random.default_rng([int(state["state"]) % 2**63, int(state["inc"]) % 2**63,
+                                 1401])
+    return {"amp_rad": float(np.radians(own.uniform(0.03, 0.05)) * own.choice([-1.0, 1.0]))}
+
+
+def hose_pull(q: np.ndarray, hose: dict[str, float]) -> np.ndarray:
+    """Joint 5's error (N,) rad: A · sin θ4 · sin θ6."""
+    return hose["amp_rad"] * np.sin(q[:, 3]) * np.sin(q[:, 5])

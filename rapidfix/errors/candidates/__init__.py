@@ -7,7 +7,9 @@ unexplained: `compliance` (joints 2 and 3 deflecting under gravity and payload),
 joint's error depending on another's angle), `registration` (tracker frame and
 scale) and `joint_reference` (the per-joint model's offsets and first harmonics re-referenced
 on new data), and `joint_driver`: one joint's error as a low-order function of one
-driver (gravity torque, temperature, time, payload, another joint's direction or angle).
+driver (gravity torque, temperature, time, payload, another joint's direction or angle),
+and `rbf_correction`: the fallback, a cross-validated smooth correction of one joint
+over a few features, for a residual no cause above describes.
 All are registered with `rapidfix.errors.effect` by their `type_name`.
 """
 
@@ -19,6 +21,7 @@ from rapidfix.errors.candidates import (  # noqa: F401  (registers every effect)
     gravity,
     joint_driver,
     joint_reference,
+    rbf_correction,
     registration,
     thermal,
     tool_offset,
