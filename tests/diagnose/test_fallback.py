@@ -26,6 +26,8 @@ from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.literals import robtarget_literals
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.sim import EFFECTS, VirtualRobot
+from rapidfix.sim.plans import point_plan, sweep_plan
 
 HIDDEN = ("hose_pull",)
 SEEDS = 3
@@ -153,3 +155,25 @@ def test_rewrite_notes_targets_outside_the_domain(tmp_path):
     with pytest.warns(OutsideRangeWarning, match="outside the domain"):
         out = rewrite_source(text.encode(), "m.mod", comp, RewriteOptions())
     assert out.moves_compensated == 1
+
+
+def test_the_hose_leaves_every_other_draw_and_the_sweeps_unchanged():
+    # an effect added to the simulator must not change existing scenarios
+    others = tuple(e for e in EFFECTS if e != "hose_pull")
+    for seed in (1, 2, 3):
+        plain = VirtualRobot.create(seed=seed, effects=others)
+        hose = VirtualRobot.create(seed=seed, effects=(*others, "hose_pull"))
+        truth = hose.truth()
+        assert truth["errors"].pop("hose_pull")["joint"] == 5
+        truth["errors"]["effects"].remove("hose_pull")
+        assert json.dumps(truth, sort_keys=True) == json.dumps(plain.truth(), sort_keys=True)
+    # no sweep sees it (joints 4 and 6 are held at 0), the points do
+    plain, hose = VirtualRobot.create(seed=2), VirtualRobot.create(seed=2, effects=HIDDEN)
+    robot = plain.robot
+    sweeps = sweep_plan(robot, plain.smr_offset_mm)
+    assert np.array_equal(hose.true_joint_error(sweeps.q), plain.true_joint_error(sweeps.q))
+    q = point_plan(robot, plain.smr_offset_mm, 30, seed=2)
+    extra = hose.true_joint_error(q) - plain.true_joint_error(q)
+    assert np.all(extra[:, [0, 1, 2, 3, 5]] == 0.0)
+    amp = np.radians(hose.truth()["errors"]["hose_pull"]["amplitude_deg"])
+    assert np.allclose(extra[:, 4], amp * np.sin(q[:, 3]) * np.sin(q[:, 5]), atol=1e-15)
