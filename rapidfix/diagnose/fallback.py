@@ -145,6 +145,7 @@ def propose(model: ErrorModel, robot: Any, data: MeasuredPoints) -> Proposal:
     r_perp = r - basis @ (basis.T @ r)
     n = len(data)
     settings = []
+    best: dict[str, Any] | None = None
     for pair in pairs:
         names = [JOINT_FEATURES[j] for j in pair] + context
         reference = [0.0] * len(pair) + [float(np.mean(getattr(data.ctx, c)))
@@ -166,13 +167,14 @@ def propose(model: ErrorModel, robot: Any, data: MeasuredPoints) -> Proposal:
                 sse = cv_errors(designs, r_perp, n, MAX_PARAMS)
                 for j in targets:
                     m = int(np.argmin(sse[j]))
-                    settings.append({"joint": j, "features": names, "reference": reference,
-                                     "lo": lo, "hi": hi, "centres": centres, "width": width,
-                                     "m": m, "cv_sse": float(sse[j, m]),
-                                     "cv_sse_none": float(sse[j, 0]), "centring": centring,
-                                     "design": designs[j]})
+                    item = {"joint": j, "features": names, "centres": centres,
+                            "width": width, "m": m, "cv_sse": float(sse[j, m]),
+                            "cv_sse_none": float(sse[j, 0])}
+                    settings.append(item)
+                    if best is None or item["cv_sse"] < best["cv_sse"]:
+                        best = {**item, "reference": reference, "lo": lo, "hi": hi,
+                                "centring": centring, "design": designs[j].copy()}
     settings.sort(key=lambda s: s["cv_sse"])
-    best = settings[0] if settings else None
     # one row per (joint acted on, features): its best setting, best first
     seen: set[tuple[int, tuple[str, ...]]] = set()
     records = []
