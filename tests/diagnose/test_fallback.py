@@ -22,6 +22,7 @@ from rapidfix.errors.effect import effect_from_dict
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import save_model
+from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.literals import robtarget_literals
@@ -177,3 +178,16 @@ def test_the_hose_leaves_every_other_draw_and_the_sweeps_unchanged():
     assert np.all(extra[:, [0, 1, 2, 3, 5]] == 0.0)
     amp = np.radians(hose.truth()["errors"]["hose_pull"]["amplitude_deg"])
     assert np.allclose(extra[:, 4], amp * np.sin(q[:, 3]) * np.sin(q[:, 5]), atol=1e-15)
+
+
+@pytest.mark.parametrize("key,value,column", [
+    ("width_unit", -1.0, "width_unit"), ("basis", [[1.0]], "basis"),
+    ("features", ["q9", "q2"], "features"), ("domain_low", [5.0, 5.0], "domain_low"),
+    ("centring", [0.1], "centring"),
+])
+def test_a_corrupt_correction_in_a_model_file_is_one_line_naming_the_key(key, value, column):
+    data = json.loads(json.dumps(_effect().to_dict()))
+    data["state"][key] = value
+    with pytest.raises(ModelError) as err:
+        effect_from_dict(data)
+    assert err.value.column == column and "\n" not in str(err.value)

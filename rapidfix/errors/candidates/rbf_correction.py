@@ -101,19 +101,19 @@ class RBFCorrection(VectorEffect):
         hi_a = np.asarray(hi, dtype=float).reshape(-1)
         if lo_a.shape != (d,) or hi_a.shape != (d,) or not np.all(np.isfinite(lo_a)) \
                 or not np.all(np.isfinite(hi_a)) or not np.all(hi_a > lo_a):
-            raise ModelError("the domain needs lo < hi for every feature", column="domain")
+            raise ModelError("the domain needs lo < hi for every feature", column="domain_low")
         c = np.asarray(centres, dtype=float)
         if c.ndim != 2 or c.shape[1] != d or not 1 <= c.shape[0] <= 200 \
                 or not np.all(np.isfinite(c)):
             raise ModelError(f"centres must be (K, {d}) finite unit-box points, K ≤ 200",
-                             column="centres")
+                             column="centres_unit")
         b = np.asarray(basis, dtype=float)
         if b.ndim != 2 or b.shape[0] != c.shape[0] or not 1 <= b.shape[1] <= c.shape[0] \
                 or not np.all(np.isfinite(b)):
             raise ModelError(f"basis must be (K={c.shape[0]}, m ≤ K) finite numbers",
                              column="basis")
         if not (np.isfinite(width) and 0.0 < float(width) <= 100.0):
-            raise ModelError(f"width {width!r} must be positive", column="width")
+            raise ModelError(f"width {width!r} must be positive", column="width_unit")
         mu = np.zeros(c.shape[0]) if centring is None else np.asarray(centring, dtype=float)
         if mu.shape != (c.shape[0],) or not np.all(np.isfinite(mu)):
             raise ModelError("centring needs one finite value per centre", column="centring")
