@@ -5,7 +5,8 @@ against the quantity that drives it — payload for compliance, the motion
 direction for backlash, temperature or time for thermal drift, the source
 joint's angle for coupling, the joint-6 angle for a tool offset (the error
 turns with the flange), the distance from the points' centre for a scale error,
-the joint-2 angle for link geometry; a structured effect's driver.
+the joint-2 angle for link geometry; a structured effect's driver; for a correction
+of unknown cause, the correction itself (its value on the joint it acts on).
 """
 
 from __future__ import annotations
@@ -55,6 +56,10 @@ def exposing_feature(effect: Effect, data: MeasuredPoints) -> Feature:
         return _driver_feature(effect, data)
     if kind == "tool_offset":
         return Feature(np.degrees(q[:, 5]), "joint 6 angle (°)")
+    if kind == "rbf_correction":
+        joint = int(getattr(effect, "joint", 0))
+        value = effect.joint_delta(q, ctx)[:, joint]
+        return Feature(np.degrees(value), f"the correction of joint {joint + 1} (°)")
     if kind == "registration":
         centre = data.xyz.mean(axis=0)
         return Feature(np.linalg.norm(data.xyz - centre, axis=1),

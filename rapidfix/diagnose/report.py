@@ -139,6 +139,26 @@ def statement(sel: Selection) -> str:
             " See each candidate's evidence below.")
 
 
+#: rows of the fallback's ranking shown in the report and the JSON
+FALLBACK_ROWS = 12
+
+
+def fallback_record(sel: Selection) -> dict[str, Any] | None:
+    """JSON data of the fallback's search, when it was tried: settings searched, what
+    it proposed (or why nothing), its ranking, and the domain of an accepted one."""
+    proposal = sel.fallback
+    if proposal is None:
+        return None
+    accepted = next((t for t in sel.accepted if t.kind == "rbf_correction"), None)
+    effect = None if accepted is None else accepted.effect
+    return {"settings_searched": proposal.variants,
+            "proposed": proposal.detail or None,
+            "reason": proposal.reason or None,
+            "settings": proposal.settings[:FALLBACK_ROWS],
+            "accepted": accepted is not None,
+            "domain": None if effect is None else getattr(effect, "domain", None)}
+
+
 def _error_table(title: str, rows: list[tuple[str, dict[str, Any]]]) -> Table:
     body = []
     for label, s in rows:
@@ -176,6 +196,7 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
         "baseline_validation_mean_mm": sel.baseline.validation.mean_mm,
         "candidates": [trial_record(t) for t in sel.trials],
         "residual_follows": ranking_records(sel.ranking),
+        "fallback": fallback_record(sel),
     }
     summary.update(extra_summary or {})
     report = Report(title, summary, notes=[text, *(notes or [])])
@@ -217,6 +238,20 @@ def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
             "Each variant's regressors (times the points' sensitivity to that joint's "
             "error, off everything the final model fits) regressed on the final model's "
             "calibration residual; a ranking, not a test (the tests are the candidates')."))
+    if sel.fallback is not None and sel.fallback.settings:
+        report.tables.append(Table(
+            "What the residual depends on: a smooth correction of one joint over two "
+            "joints, best first",
+            ["joint acted on", "depends on", "centres", "width (unit box)", "parameters",
+             "CV RMS without (mm)", "CV RMS with (mm)"],
+            [[r["joint"], ", ".join(r["depends_on"]), r["centres"], r["width_unit"],
+              r["parameters"], r["cv_rms_mm_without"], r["cv_rms_mm"]]
+             for r in sel.fallback.settings[:FALLBACK_ROWS]],
+            "Each joint × pair of joints (and the context that varies): a Gaussian RBF "
+            "correction, its centres, width and number of parameters chosen by "
+            "cross-validation on the calibration points, projected off everything the "
+            "model fits; the RMS per coordinate of the calibration residual predicted out "
+            "of fold. The top one is the fallback candidate; a ranking, not a test."))
     for trial in sel.accepted:
         effect = trial.stage.model.effects[-1] if trial.stage else None
         if effect is None:

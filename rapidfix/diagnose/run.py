@@ -36,6 +36,8 @@ from rapidfix.report.document import Report, write_report
 #: fewest calibration points accepted (the richest candidate has ~40 parameters)
 MIN_CALIBRATION_POINTS = 20
 MIN_VALIDATION_POINTS = 5
+#: rows of each ranking the command prints
+SUMMARY_RANKING = 3
 
 
 @dataclass
@@ -174,4 +176,15 @@ def summary_lines(result: Diagnosis) -> list[str]:
     final = sel.final or sel.before
     lines += ["", f"validation mean error: {sel.before.validation.mean_mm:.4f} mm before, "
               f"{final.validation.mean_mm:.4f} mm after (noise floor ≈ {sel.floor_mm:.4f} mm)"]
+    if sel.ranking:
+        lines += ["", "what the residual left follows (joint × driver, linear BIC gain, share "
+                  "of the calibration residual):"]
+        lines += [f"  {v.score:8.1f} {100 * v.share:4.0f} %  {v.label}"
+                  for v in sel.ranking[:SUMMARY_RANKING]]
+    if sel.fallback is not None and sel.fallback.settings:
+        lines += ["", "what a smooth correction of one joint over two joints predicts "
+                  "(cross-validated RMS per coordinate, mm):"]
+        lines += [f"  {r['cv_rms_mm_without']:.4f} → {r['cv_rms_mm']:.4f}  joint {r['joint']} "
+                  f"over {', '.join(r['depends_on'])}"
+                  for r in sel.fallback.settings[:SUMMARY_RANKING]]
     return lines

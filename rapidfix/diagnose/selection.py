@@ -32,6 +32,16 @@ flexible candidate can stand in for two simple causes at once (link geometry
 spans a tool offset and a tracker scale), a round won by one candidate looks one
 step ahead: two simpler ones that together pass and beat it by the BIC margin are
 accepted instead (`simpler_pair`).
+
+When a round has no passing candidate but the validation residual is still above
+the noise floor, the non-parametric fallback (`rapidfix.diagnose.fallback`: a
+cross-validated RBF correction of one joint over the joints the residual follows)
+is fitted and judged by the same three tests, charged for every setting it
+searched; it is tried once. It is also tried in a round whose winner leaves the
+validation residual above `FLOOR_CLEAR` × the noise floor: when the correction
+brings it to the floor and gains more than `BIC_MARGIN` over the winner, the
+winner is not named (a cause that explains only part of what a correction of
+unknown cause explains is not the cause).
 """
 
 from __future__ import annotations
@@ -46,6 +56,8 @@ import numpy as np
 
 from rapidfix.diagnose.candidates import CANDIDATES, REPEATABLE, Candidate, Setting, build
 from rapidfix.diagnose.data import MEAN_NORM_PER_SIGMA
+from rapidfix.diagnose.fallback import PHYSICS as FALLBACK_PHYSICS
+from rapidfix.diagnose.fallback import Proposal, propose
 from rapidfix.diagnose.residuals import Residuals, residuals
 from rapidfix.diagnose.structured import Screened, screen
 from rapidfix.errors.candidates.joint_reference import JointReference
@@ -61,6 +73,12 @@ Z_MIN = 3.0
 SHARE_MIN = 0.2
 #: at most this many rounds (structured effects may be accepted more than once)
 MAX_ROUNDS = 8
+#: the fallback is tried only on a validation residual above this × the noise floor
+FALLBACK_FROM = 1.25
+#: a winner leaving the validation residual above this × the floor may give way to it
+FLOOR_CLEAR = 1.5
+#: the fallback's kind, as trials and the report name it
+FALLBACK = "rbf_correction"
 
 
 @dataclass
@@ -120,6 +138,8 @@ class Selection:
     noise_refined: bool = False
     #: what the final residual correlates with: joint × driver variants, best first
     ranking: list[Screened] = field(default_factory=list)
+    #: the fallback's search (settings by cross-validation), when it was tried
+    fallback: Proposal | None = None
 
     @property
     def floor_mm(self) -> float:
@@ -247,6 +267,30 @@ def simpler_pair(best: Trial, tried: Sequence[Trial], setting: Setting, val: Mea
     return made, [best] if choice is None else list(choice)
 
 
+def try_fallback(current: Stage, setting: Setting, val: MeasuredPoints,
+                 noise_sigma_mm: float, round_no: int) -> tuple[Trial, Proposal]:
+    """The fallback's proposal on the current stage, fitted and judged like a candidate."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutsideRangeWarning)
+        proposal = propose(current.model, setting.robot, setting.calibration)
+    trial = Trial(FALLBACK, FALLBACK_PHYSICS, round_no, proposal.detail, proposal.reason,
+                  proposal.variants)
+    if proposal.effect is None:
+        trial.verdict = f"not tried: {proposal.reason}"
+        return trial, proposal
+    trial_model = copy.deepcopy(current.model)
+    trial_model.effects.append(proposal.effect)
+    trial.stage = _fit(trial_model, setting.robot, setting.calibration, val)
+    trial.previous = current
+    judge(trial, current, noise_sigma_mm)
+    effect = trial.stage.model.effects[-1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutsideRangeWarning)
+        size = effect.joint_delta(setting.calibration.q, setting.calibration.ctx)
+    effect.cv["rms_deg"] = float(np.degrees(np.sqrt(np.mean(size[:, effect.joint] ** 2))))
+    return trial, proposal
+
+
 def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoints, *,
            default_payload_kg: float, noise_sigma_mm: float,
            candidates: Sequence[str] = CANDIDATES,
@@ -257,6 +301,8 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
     setting = Setting(robot, cal, default_payload_kg)
     current = baseline
     remaining = list(candidates)
+    # the fallback needs the ranking of the structured search; it is tried at most once
+    fallback_open = any(kind in REPEATABLE for kind in candidates)
     round_no = 0
     while remaining and round_no < MAX_ROUNDS:
         round_no += 1
@@ -267,21 +313,53 @@ def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoin
             tried.append(_try(kind, current, setting, val, noise_sigma_mm, round_no))
         sel.trials.extend(tried)
         passing = [t for t in tried if t.verdict == "passes"]
+        floor = MEAN_NORM_PER_SIGMA * noise_sigma_mm
         if not passing:
-            break
+            if not fallback_open or current.validation.mean_mm <= FALLBACK_FROM * floor:
+                break
+            if progress:
+                progress(f"round {round_no}: {FALLBACK}")
+            fallback, sel.fallback = try_fallback(current, setting, val, noise_sigma_mm,
+                                                  round_no)
+            fallback_open = False
+            sel.trials.append(fallback)
+            if fallback.verdict != "passes":
+                break
+            passing = [fallback]
         best = prefer_physical(max(passing, key=lambda t: t.delta_bic), passing)
         ahead, chosen = simpler_pair(best, tried, setting, val, noise_sigma_mm)
         sel.trials.extend(ahead)
         if best not in chosen:
             best.verdict = (f"passes, but {' + '.join(t.kind for t in chosen)} gain more BIC "
                             "with fewer parameters (pair look-ahead)")
+        if fallback_open and best.kind != FALLBACK:
+            last = chosen[-1].stage
+            assert last is not None
+            if last.validation.mean_mm > FLOOR_CLEAR * floor:
+                if progress:
+                    progress(f"round {round_no}: {FALLBACK} (against {best.kind})")
+                fallback, proposal = try_fallback(current, setting, val, noise_sigma_mm,
+                                                  round_no)
+                sel.trials.append(fallback)
+                gain = sum(t.delta_bic for t in chosen)
+                if (fallback.verdict == "passes" and fallback.stage is not None
+                        and fallback.stage.validation.mean_mm <= FLOOR_CLEAR * floor
+                        and fallback.delta_bic > gain + BIC_MARGIN):
+                    for t in chosen:
+                        t.verdict = (f"passes, but leaves the validation residual above "
+                                     f"{FLOOR_CLEAR:g}× the noise floor where the correction "
+                                     "of unknown cause brings it there with more than "
+                                     f"{BIC_MARGIN:g} more BIC gain: not named")
+                    chosen = [fallback]
+                    sel.fallback = proposal
+                    fallback_open = False
         for trial in chosen:
             trial.accepted = True
             trial.verdict = "accepted"
             sel.accepted.append(trial)
             assert trial.stage is not None
             current = trial.stage
-            if trial.kind not in REPEATABLE:
+            if trial.kind not in REPEATABLE and trial.kind in remaining:
                 remaining.remove(trial.kind)
     sel.final = current if sel.accepted else before
     refine_noise(sel, current)

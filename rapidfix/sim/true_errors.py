@@ -44,6 +44,13 @@ Effects that act where no joint error can (issue #14, frames: tool, base, link):
 - ``link_thermal``: one link (the lower or the upper arm) grows by α·L·ΔT (α of
   steel) as the drive next to it warms up once the work cycle starts (at
   `cycle_start_s`, the session's points; the sweeps are taken cold).
+An effect that neither a candidate nor one joint and one driver describes (issue #14,
+section 2: only a smooth correction over several joints can follow it):
+
+- ``hose_pull``: the dress pack pulls on joint 5 as the forearm (joint 4) and the
+  wrist (joint 6) twist it together: A · sin θ4 · sin θ6 (A 0.03–0.05°). The sweeps
+  hold joints 4 and 6 at 0, so no sweep sees it, and its average over either angle
+  alone is about zero, so no function of one joint's angle describes it.
 """
 
 from __future__ import annotations
@@ -70,6 +77,7 @@ EFFECTS: tuple[str, ...] = (
     "tool_bending",
     "base_tilt",
     "link_thermal",
+    "hose_pull",
 )
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s², base z is up
@@ -150,6 +158,8 @@ class TrueErrors:
     #: cycle_start_s
     link_thermal: dict[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    #: hose_pull: amp_rad (issue #14 section 2; drawn by `draw_hose_pull`)
+    hose: dict[str, float] | None = None
 
     @property
     def effects(self) -> list[str]:
@@ -167,7 +177,8 @@ class TrueErrors:
               "joint_coupling2": self.coupling2 is not None,
               "tool_bending": self.tool_bending is not None,
               "base_tilt": self.base_tilt is not None,
-              "link_thermal": self.link_thermal is not None}
+              "link_thermal": self.link_thermal is not None,
+              "hose_pull": self.hose is not None}
         return [name for name in EFFECTS if on[name]]
 
     # ---- drawing ---------------------------------------------------------------------
@@ -181,6 +192,7 @@ class TrueErrors:
             raise ValueError(f"unknown effect(s) {', '.join(unknown)}; "
                              f"known: {', '.join(EFFECTS)}")
         # Draw everything whether used or not, so adding an effect leaves the others unchanged.
+        hose = draw_hose_pull(rng)  # its own stream; `rng` does not advance
         joint = JointErrors.draw(rng)
         compliance = rng.uniform(0.6e-6, 1.5e-6, 2)
         dirs, points, home = _perturbed_geometry(robot, rng)
@@ -237,6 +249,7 @@ class TrueErrors:
             direction_shift=shift if "direction_zero_shift" in on else None,
             coupling2=coupling2 if "joint_coupling2" in on else None,
             **{key: value for key, value in frames.items() if key in on},
+            hose=hose if "hose_pull" in on else None,
         )
 
     # ---- evaluation ------------------------------------------------------------------
@@ -265,6 +278,8 @@ class TrueErrors:
             c = self.coupling2
             delta[:, int(c["target"])] += c["amp_rad"] * np.sin(
                 2.0 * q[:, int(c["source"])] + c["phase_rad"])
+        if self.hose is not None:
+            delta[:, 4] += hose_pull(q, self.hose)
         if self.backlash is not None and direction is not None:
             delta -= 0.5 * self.backlash * direction
         if self.direction_shift is not None and direction is not None:
@@ -344,6 +359,9 @@ class TrueErrors:
         for key in ("tool_bending", "base_tilt", "link_thermal"):
             if getattr(self, key) is not None:
                 d[key] = dict(getattr(self, key))
+        if self.hose is not None:
+            d["hose_pull"] = {"joint": 5, "depends_on_joints": [4, 6],
+                              "amplitude_deg": float(np.degrees(self.hose["amp_rad"]))}
         return d
 
     @classmethod
@@ -356,6 +374,7 @@ class TrueErrors:
         enc = d.get("encoder_thermal")
         shift = d.get("direction_zero_shift")
         coup2 = d.get("joint_coupling2")
+        hose = d.get("hose_pull")
         return cls(
             joint=JointErrors.from_dict(d["joint_errors"]),
             compliance=None if comp is None else np.array([comp["j2"], comp["j3"]]),
@@ -383,6 +402,8 @@ class TrueErrors:
             tool_bending=d.get("tool_bending"),
             base_tilt=d.get("base_tilt"),
             link_thermal=d.get("link_thermal"),
+            hose=None if hose is None else {
+                "amp_rad": float(np.radians(hose["amplitude_deg"]))},
         )
 
 
@@ -524,3 +545,18 @@ def link_growth(growth: dict[str, float], axis_dirs: np.ndarray, axis_points: np
     for j in range(link):  # the joints before the link
         R = R @ _rotations(q[:, j:j + 1] * axis_dirs[j])
     return grown[:, None] * (R @ v)
+# ---- hose_pull (issue #14 section 2): a smooth error over two joints -------------------
+
+
+def draw_hose_pull(rng: np.random.Generator) -> dict[str, float]:
+    """The hose's amplitude, from a stream of its own derived from `rng`'s state without
+    advancing it (so every other effect's draws stay as they were for every seed)."""
+    state = rng.bit_generator.state["state"]
+    own = np.random.default_rng([int(state["state"]) % 2**63, int(state["inc"]) % 2**63,
+                                 1401])
+    return {"amp_rad": float(np.radians(own.uniform(0.03, 0.05)) * own.choice([-1.0, 1.0]))}
+
+
+def hose_pull(q: np.ndarray, hose: dict[str, float]) -> np.ndarray:
+    """Joint 5's error (N,) rad: A · sin θ4 · sin θ6."""
+    return hose["amp_rad"] * np.sin(q[:, 3]) * np.sin(q[:, 5])

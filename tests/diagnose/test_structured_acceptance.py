@@ -58,10 +58,7 @@ def test_hidden_effect_is_traced_to_its_joint_and_driver(cell, effect):
         sel = result.selection
         after = sel.final.validation.mean_mm
         assert after <= 1.5 * _floor(data), (seed, after, _floor(data))
-        # the rewrite's predicted error "before" is not in the axis-1 gauge of the run;
-        # on seed 4 the per-joint model alone mispredicts it by 0.15 mm (joint 1's own
-        # errors), so only the landing is checked here
-        cell.check_on_robot((effect,), seed, check_prediction=False)
+        cell.check_on_robot((effect,), seed)
 
 
 def test_structured_parameters_match_the_truth(cell):

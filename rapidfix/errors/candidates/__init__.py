@@ -9,7 +9,9 @@ scale) and `joint_reference` (the per-joint model's offsets and first harmonics 
 on new data), and `joint_driver`: one joint's error as a low-order function of one
 driver (gravity torque, temperature, time, payload, another joint's direction or angle),
 and `frame_driver`: the tool, the base or one link moved by a driver (the tool bending
-under gravity, the base tilting with the overturning moment, a link growing with heat).
+under gravity, the base tilting with the overturning moment, a link growing with heat),
+and `rbf_correction`: the fallback, a cross-validated smooth correction of one joint
+over a few features, for a residual no cause above describes.
 All are registered with `rapidfix.errors.effect` by their `type_name`.
 """
 
@@ -22,6 +24,7 @@ from rapidfix.errors.candidates import (  # noqa: F401  (registers every effect)
     gravity,
     joint_driver,
     joint_reference,
+    rbf_correction,
     registration,
     thermal,
     tool_offset,
