@@ -18,16 +18,21 @@ cannot:
   first move of a routine, a loop body or an IF branch), the direction is
   unknown and effects take the value midway between the directions.
 - **Temperature** of the cell, as the user states it (`--temperature`).
+- **Configuration monitoring** (`ConfL`/`ConfJ \\Off`), followed like the load: with
+  it off, the controller reaches a target on the configuration nearest the one it
+  is in, not necessarily the one its confdata names (`config_monitoring`).
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from rapidfix.errors.context import STILL_RAD, Context
+from rapidfix.postprocess.plan import FreeConfiguration
 from rapidfix.postprocess.resolve import Declarations
 from rapidfix.rapid import Program
 from rapidfix.rapid import syntax as s
@@ -67,23 +72,93 @@ def _join(a: Any, b: Any) -> Any:
     return a if a == b else _UNKNOWN
 
 
-class _LoadWalk:
-    """Follows GripLoad through statement lists in execution order (see the module doc)."""
+class _StateWalk:
+    """Follows a state that statements set (a gripped load, configuration monitoring)
+    through the statement lists in execution order: loops and IFs join what can reach a
+    statement, calls of the program's routines carry it in and out (see the module doc).
+    Subclasses say which calls change it (`step`) and how two states join (`join`)."""
 
-    def __init__(self, program: Program, outside: Declarations) -> None:
+    unknown: Any = _UNKNOWN
+
+    def __init__(self, program: Program) -> None:
         self.program = program
-        self.outside = outside
         self.index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
         self.routines = {r.name.lower(): r for r in self._routine_nodes()}
         self.record: dict[int, Any] = {}
         self.entries: dict[str, Any] = {}
         self.exits: dict[tuple[str, Any], Any] = {}
         self.active: set[str] = set()
-        self.seen: set[int] = set()  # the GripLoad statements met
+        self.seen: set[int] = set()  # the statements met that set the state
+
+    def join(self, a: Any, b: Any) -> Any:
+        """The state when either a or b can reach a statement."""
+        return _join(a, b)
+
+    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+        """The state after a call that is not a routine of the program."""
+        return state
 
     def _routine_nodes(self) -> list[s.Routine]:
         return [item for module in self.program.syntax.modules for item in module.items
                 if isinstance(item, s.Routine)]
+
+    def body(self, statements: list[s.Statement], state: Any, routine: str, depth: int) -> Any:
+        """Walk one statement list from `state`; the state after it."""
+        for statement in statements:
+            k = self.index_of.get(id(statement))
+            if k is not None:
+                self.record[k] = self.join(self.record.get(k, state), state)
+                continue
+            nested = list(statement.bodies())
+            if nested:
+                after = state
+                for inner in nested:
+                    end = self.body(inner, state, routine, depth)
+                    if end != state:  # a loop may run it again, an IF may skip it
+                        self.body(inner, self.join(state, end), routine, depth)
+                    after = self.join(after, end)
+                state = after
+            elif isinstance(statement, s.ProcedureCall):
+                if statement.key in self.routines:
+                    state = self.call(statement.key, state, depth + 1)
+                else:
+                    state = self.step(statement, state, routine)
+        return state
+
+    def call(self, key: str, state: Any, depth: int) -> Any:
+        """Run routine `key` from `state`; its exit state (unknown on recursion)."""
+        self.entries[key] = self.join(self.entries.get(key, state), state)
+        memo = self.exits.get((key, state))
+        if memo is not None:
+            return memo
+        if key in self.active or depth > _MAX_CALL_DEPTH:
+            return self.unknown
+        self.active.add(key)
+        routine = self.routines[key]
+        end = self.body(routine.body, state, routine.name, depth)
+        for handler in routine.handlers:
+            self.body(handler.body, self.unknown, routine.name, depth)
+        self.active.discard(key)
+        self.exits[(key, state)] = end
+        return end
+
+    def run(self, start: Any) -> list[str]:
+        """Walk from `main` with `start`, then every routine main does not reach from an
+        unknown state; the names of those routines."""
+        if "main" in self.routines:
+            self.call("main", start, 0)
+        uncalled = [r.name for key, r in self.routines.items() if key not in self.entries]
+        for name in uncalled:
+            self.call(name.lower(), self.unknown, 0)
+        return uncalled
+
+
+class _LoadWalk(_StateWalk):
+    """The gripped load: set by GripLoad."""
+
+    def __init__(self, program: Program, outside: Declarations) -> None:
+        super().__init__(program)
+        self.outside = outside
 
     def load_named(self, expr: Any, routine: str) -> Any:
         """The Load an argument names, or unknown when it is not a static loaddata."""
@@ -105,58 +180,69 @@ class _LoadWalk:
             return NO_LOAD
         return Load(expr.name, float(data.mass), tuple(float(c) for c in data.cog))
 
-    def body(self, statements: list[s.Statement], state: Any, routine: str, depth: int) -> Any:
-        """Walk one statement list from `state`; the state after it."""
-        for statement in statements:
-            k = self.index_of.get(id(statement))
-            if k is not None:
-                self.record[k] = _join(self.record.get(k, state), state)
-                continue
-            nested = list(statement.bodies())
-            if nested:
-                after = state
-                for inner in nested:
-                    end = self.body(inner, state, routine, depth)
-                    if end != state:  # a loop may run it again, an IF may skip it
-                        self.body(inner, _UNKNOWN, routine, depth)
-                    after = _join(after, end)
-                state = after
-            elif isinstance(statement, s.ProcedureCall):
-                if statement.key == "gripload":
-                    self.seen.add(id(statement))
-                    args = statement.args
-                    state = (self.load_named(args[0].value, routine)
-                             if args and args[0].value is not None else _UNKNOWN)
-                elif statement.key in self.routines:
-                    state = self.call(statement.key, state, depth + 1)
-        return state
+    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+        if call.key != "gripload":
+            return state
+        self.seen.add(id(call))
+        args = call.args
+        return (self.load_named(args[0].value, routine)
+                if args and args[0].value is not None else _UNKNOWN)
 
-    def call(self, key: str, state: Any, depth: int) -> Any:
-        """Run routine `key` from `state`; its exit state (unknown on recursion)."""
-        self.entries[key] = _join(self.entries.get(key, state), state)
-        memo = self.exits.get((key, state))
-        if memo is not None:
-            return memo
-        if key in self.active or depth > _MAX_CALL_DEPTH:
-            return _UNKNOWN
-        self.active.add(key)
-        routine = self.routines[key]
-        end = self.body(routine.body, state, routine.name, depth)
-        for handler in routine.handlers:
-            self.body(handler.body, _UNKNOWN, routine.name, depth)
-        self.active.discard(key)
-        self.exits[(key, state)] = end
-        return end
+
+#: configuration monitoring of linear/circular (ConfL) and joint (ConfJ) moves:
+#: True on, False off, None not known before run time
+Monitoring = tuple["bool | None", "bool | None"]
+_MONITOR_CALLS = {"confl": 0, "confj": 1}
+
+
+class _ConfWalk(_StateWalk):
+    """Configuration monitoring: set by `ConfL \\On|\\Off` and `ConfJ \\On|\\Off`."""
+
+    unknown: Monitoring = (None, None)
+
+    def join(self, a: Any, b: Any) -> Any:
+        return tuple(x if x == y else None for x, y in zip(a, b))
+
+    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+        slot = _MONITOR_CALLS.get(call.key)
+        if slot is None:
+            return state
+        self.seen.add(id(call))
+        switches = {a.key for a in call.args if a.kind == "optional"}
+        value = True if "on" in switches else False if "off" in switches else None
+        return tuple(value if i == slot else v for i, v in enumerate(state))
+
+
+#: moves the joint way (ConfJ); every other robtarget move is linear or circular (ConfL)
+_JOINT_MOVES = ("movej", "triggj")
+_MONITOR_WORDS = re.compile(r"\bconf[lj]\b", re.IGNORECASE)
+
+
+def config_monitoring(program: Program) -> tuple[np.ndarray, np.ndarray]:
+    """Per motion of `program.motions`: (off, known) bool arrays — configuration
+    monitoring for that move's kind (ConfJ for MoveJ/TriggJ…, ConfL for the linear and
+    circular rest) is
+    known to be off / is known before run time. `main` starts with both on, as the
+    controller sets them when a program starts from the beginning."""
+    m = len(program.motions)
+    if not _MONITOR_WORDS.search(program.text):  # nothing switches it: on everywhere
+        return np.zeros(m, dtype=bool), np.ones(m, dtype=bool)
+    walk = _ConfWalk(program)
+    walk.run((True, True))
+    off = np.zeros(m, dtype=bool)
+    known = np.zeros(m, dtype=bool)
+    for k, motion in enumerate(program.motions):
+        state = walk.record.get(k, walk.unknown)
+        value = state[1 if motion.name.lower().startswith(_JOINT_MOVES) else 0]
+        off[k] = value is False
+        known[k] = value is not None
+    return off, known
 
 
 def grip_loads(program: Program, outside: Declarations | None = None) -> GripLoads:
     """The gripped load in effect at every motion of the program (see the module doc)."""
     walk = _LoadWalk(program, outside or Declarations([]))
-    if "main" in walk.routines:
-        walk.call("main", NO_LOAD, 0)
-    uncalled = [r.name for key, r in walk.routines.items() if key not in walk.entries]
-    for name in uncalled:
-        walk.call(name.lower(), _UNKNOWN, 0)
+    uncalled = walk.run(NO_LOAD)
     if len(walk.seen) == 0:  # nothing in this program sets a gripped load
         loads: list[Load | None] = [NO_LOAD] * len(program.motions)
         return GripLoads(loads, 0, uncalled)
@@ -259,19 +345,23 @@ class ProgramConditions:
             if site.rows:
                 motion_of_row[site.rows] = site.index
         self._payload(targets, grips, motion_of_row)
+        off, _ = config_monitoring(program)
+        #: rows that run with configuration monitoring off (ConfL/ConfJ \Off)
+        self.config_free = off[motion_of_row] if n else np.zeros(0, dtype=bool)
+        chain = "last_direction" in needs or bool(self.config_free.any())
         # the points the chain runs through: target rows, then known MoveAbsJ joints
         motions = program.motions
         last_point = np.full(len(motions), -1, dtype=np.int64)
         prev_row = np.full(n, -1, dtype=np.int64)
         extra: list[np.ndarray] = []
-        pred = predecessors(program) if "last_direction" in needs else [-1] * len(motions)
+        pred = predecessors(program) if chain else [-1] * len(motions)
         site_of = {site.index: site for site in sites if site.rows}
         for k, motion in enumerate(motions):  # one pass over the instructions, no math
             site = site_of.get(k)
             if site is not None:
                 last_point[k] = site.rows[-1]
                 continue
-            joints = _absj_joints(motion) if "last_direction" in needs else None
+            joints = _absj_joints(motion) if chain else None
             if joints is not None:
                 last_point[k] = n + len(extra)
                 extra.append(joints)
@@ -317,6 +407,13 @@ class ProgramConditions:
         frame = np.broadcast_to(targets.placement.tool, (n, 4, 4))
         self.payload_kg, self.payload_cog_mm = total_load(tool_mass, tool_cog, frame, mass, cog)
         self.grip_unknown = int(np.count_nonzero(~known & ~total))
+
+    def free_configuration(self) -> FreeConfiguration | None:
+        """The rows whose configuration the controller chooses (monitoring off), with the
+        chain of moves it chooses it from; None when every row keeps its confdata."""
+        if not self.config_free.any():
+            return None
+        return FreeConfiguration(self.config_free, self.prev, self.extra)
 
     def force_arrival(self, rows: np.ndarray, direction: np.ndarray) -> None:
         """Rows reached from a known side (an approach point just before them): their

@@ -97,6 +97,60 @@ def _explain_conf(robot: Any, flange: np.ndarray, conf: np.ndarray, status: np.n
                        f"(it is reachable with {options})")
 
 
+@dataclass(frozen=True)
+class FreeConfiguration:
+    """Rows that run with configuration monitoring off (`ConfL`/`ConfJ \\Off`): the
+    controller reaches them on the configuration nearest the one it is in, whatever their
+    confdata names. `rows` (N,) bool; `prev` (N+M,) the point executed just before each
+    row (-1 not known), where points N.. are `extra` (M,6) joints of MoveAbsJ moves."""
+
+    rows: np.ndarray
+    prev: np.ndarray
+    extra: np.ndarray
+
+
+#: passes of "nearest the move before" along a chain of moves whose configuration is
+#: free; each pass carries a changed branch one move further
+_FREE_PASSES = 64
+
+
+def _follow_nearest(robot: Any, flange: np.ndarray, q: np.ndarray, status: np.ndarray,
+                    free: FreeConfiguration) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (N,6) and status (N,) with the free rows on the solution nearest the joints
+    of the move before them. A free row whose move before is not known keeps its
+    confdata's solution, or, without one, takes the one nearest the calibration
+    position (all joints 0), where an arm is when a cell starts."""
+    n = q.shape[0]
+    rows = np.flatnonzero(free.rows)
+    q = np.where((status == IKStatus.OK)[:, None], np.asarray(q, dtype=float), np.nan)
+    status = np.asarray(status).copy()
+    start = rows[(free.prev[rows] < 0) & (status[rows] != IKStatus.OK)]
+    if start.size:
+        qn, st = robot.ik_nearest(flange[start], np.zeros((start.size, 6)))
+        q[start] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
+        status[start] = st
+    chained = rows[free.prev[rows] >= 0]
+    seeds = np.full((chained.size, 6), np.nan)
+    for _ in range(_FREE_PASSES):
+        points = np.concatenate([q, free.extra])
+        now = points[free.prev[chained]]
+        changed = np.isfinite(now).all(axis=1) & ~np.all(now == seeds, axis=1)
+        if not changed.any():
+            break
+        seeds[changed] = now[changed]
+        sel = chained[changed]
+        qn, st = robot.ik_nearest(flange[sel], now[changed])
+        good = st == IKStatus.OK
+        q[sel] = np.where(good[:, None], qn, q[sel])
+        status[sel] = np.where(good, IKStatus.OK, status[sel])
+    rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
+    if rest.size:
+        qn, st = robot.ik_nearest(flange[rest], np.zeros((rest.size, 6)))
+        q[rest] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
+        status[rest] = st
+    return q[:n], status
+
+
 Conditions = Callable[[np.ndarray, np.ndarray], Context]
 """The context of every row for its joints (N,6) and whether each is solved (N,)."""
 
@@ -108,8 +162,10 @@ def plan_targets(
     conf: np.ndarray,
     placement: Placement,
     conditions: Context | Conditions,
+    free: FreeConfiguration | None = None,
 ) -> Plan:
-    """Plan every target (N,4,4) TCP pose in its work object, on its confdata branch.
+    """Plan every target (N,4,4) TCP pose in its work object, on its confdata branch
+    (the `free` rows: on the branch nearest the move before them).
 
     `conditions` is the rows' context, or a function giving it for the rows' joints
     (motion directions follow from the joints). The directions are taken from the
@@ -125,6 +181,8 @@ def plan_targets(
     context = conditions if callable(conditions) else (lambda _q, _known: conditions)
     q_ideal, status = ik_on_conf(robot, flange, conf)
     status = np.asarray(status)
+    if free is not None and free.rows.any():
+        q_ideal, status = _follow_nearest(robot, flange, q_ideal, status, free)
     solved = status == IKStatus.OK
     for code, text in REASONS.items():
         reason[status == code] = text

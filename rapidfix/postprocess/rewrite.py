@@ -319,7 +319,7 @@ class _Rewriter:
             self._plan_approach()
         if self.plan_ is None:
             self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
-                                      self.conditions)
+                                      self.conditions, self.conditions.free_configuration())
         # rows are in site order: the first failed row of each site names its reason
         for row in np.flatnonzero(~self.plan_.ok).tolist():
             site = self.sites[int(t.site[row])]
@@ -353,7 +353,7 @@ class _Rewriter:
             self.conditions.force_arrival(rows, direction)
             t = self.targets
             self.plan_ = plan_targets(self.model, self.robot, t.pose, t.conf, t.placement,
-                                      self.conditions)
+                                      self.conditions, self.conditions.free_configuration())
             start = self.plan_.q_cmd[rows] - direction * self.approach_margin
             low = np.asarray(self.robot.limits, dtype=float)[:, 0]
             down = (start < low) & (direction > 0)
@@ -815,6 +815,16 @@ def _run_statement(job: _Rewriter, options: RewriteOptions
                      + (f"; {unknown} move(s) start where the program cannot say before run "
                         "time (first move of a routine, loop or branch): taken midway "
                         "between the directions" if unknown else ""))
+    free = cond.config_free & ok
+    if free.any():
+        other = int(np.count_nonzero(np.any(
+            job.robot.confdata(job.plan_.q_ideal[free]) != job.targets.conf[free], axis=1)))
+        record["configuration"] = "nearest_where_monitoring_off"
+        record["config_free_moves"] = str(int(np.count_nonzero(free)))
+        notes.append(f"configuration: {int(np.count_nonzero(free))} move(s) run with "
+                     "configuration monitoring off (ConfL/ConfJ \\Off), so the controller "
+                     "takes the configuration nearest the one it is in: compensated on that "
+                     f"one, which differs from the confdata written for {other} of them")
     if options.temperature_c is not None and "temp_c" not in needs:
         notes.append(f"--temperature {options.temperature_c:g} °C: no effect of the model "
                      "depends on the cell temperature, so it changes nothing (recorded only)")

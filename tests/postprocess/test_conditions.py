@@ -4,7 +4,12 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rapidfix.postprocess.conditions import NO_LOAD, arrival_directions, grip_loads
+from rapidfix.postprocess.conditions import (
+    NO_LOAD,
+    arrival_directions,
+    config_monitoring,
+    grip_loads,
+)
 from rapidfix.rapid import parse_program
 
 PROGRAM = """MODULE Cell
@@ -87,3 +92,52 @@ def test_arrival_directions_match_a_point_by_point_walk(n, seed):
     initial = rng.choice([-1.0, 0.0, 1.0], size=(n, 6))
     got = arrival_directions(q, prev, initial)
     assert np.array_equal(got, _naive(q, prev, initial))
+
+
+MONITORING = """MODULE Cell
+  VAR bool ok:=TRUE;
+  PROC main()
+    MoveL p1, v100, fine, tool0;
+    ConfL \\Off;
+    MoveL p2, v100, fine, tool0;
+    MoveJ p3, v100, fine, tool0;
+    Weld;
+    MoveL p4, v100, fine, tool0;
+    IF ok ConfL \\Off;
+    MoveC p5, p6, v100, fine, tool0;
+    ConfJ \\Off;
+    MoveJ p7, v100, fine, tool0;
+  ENDPROC
+  PROC Weld()
+    MoveL p8, v100, fine, tool0;
+    ConfL \\On;
+  ENDPROC
+  PROC Service()
+    TriggJ p9, v100, t1, fine, tool0;
+    ConfJ \\Off;
+    MoveJ p10, v100, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_configuration_monitoring_follows_the_execution_order():
+    program = parse_program(MONITORING.encode(), "cell.mod")
+    off, known = config_monitoring(program)
+    state = {m.target.text: ("off" if o else "on") if k else "unknown"
+             for m, o, k in zip(program.motions, off, known)}
+    assert state["p1"] == "on"  # main starts with both on
+    assert state["p2"] == "off"
+    assert state["p3"] == "on"  # ConfJ governs MoveJ, and it is still on
+    assert state["p8"] == "off"  # carried into the routine ...
+    assert state["p4"] == "on"  # ... and its ConfL \On out of it
+    assert state["p6"] == "unknown"  # the IF may switch it off (MoveC to p6)
+    assert state["p7"] == "off"
+    assert state["p9"] == "unknown"  # not called from main: not known ...
+    assert state["p10"] == "off"  # ... until the routine itself switches it
+
+
+def test_without_conf_statements_monitoring_is_on_everywhere():
+    text = "\n".join(line for line in MONITORING.splitlines() if "Conf" not in line)
+    off, known = config_monitoring(parse_program(text.encode(), "cell.mod"))
+    assert not off.any() and known.all()
