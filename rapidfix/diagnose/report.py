@@ -101,8 +101,11 @@ def _passes(trial: Trial) -> bool:
 def trial_name(trial: Trial) -> str:
     """What an accepted effect is, in words: its kind, or for a structured effect where
     it acts and what drives it, with its leading parameter."""
-    sentence = getattr(getattr(trial, "effect", None), "sentence", None)
-    return f"{trial.kind}: {sentence()}" if callable(sentence) else trial.kind
+    effect = getattr(trial, "effect", None)
+    sentence = getattr(effect, "sentence", None)
+    if not callable(sentence):
+        return trial.kind
+    return f"{getattr(effect, 'type_name', trial.kind)}: {sentence()}"
 
 
 def statement(sel: Selection) -> str:
