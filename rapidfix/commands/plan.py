@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `plan` command."""
     from rapidfix.campaign.plan import APPROACH_MODES
     from rapidfix.campaign.program import TRIGGERS
-    from rapidfix.kinematics.cli_args import add_robot_arguments
+    from rapidfix.commands.robot_options import add_robot_arguments
 
     p = subparsers.add_parser(
         "plan",
@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rapidfix.campaign.plan import make_plan, write_plan
-    from rapidfix.kinematics.cli_args import robot_from_args
+    from rapidfix.commands.robot_options import robot_from_args
 
     out = Path(args.out_dir)
     names = ("measure.mod", "poses.csv", "plan.toml")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rapidfix.commands.robot_options import add_robot_arguments
 from rapidfix.exceptions import UsageError
 from rapidfix.paths import check_output_file
 
@@ -18,10 +19,7 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by `rewrite` and `batch`."""
     parser.add_argument("--model", required=True, metavar="MODEL",
                         help="error model file (from `rapidfix fit` or `rapidfix diagnose`)")
-    robot = parser.add_mutually_exclusive_group()
-    robot.add_argument("--robot", metavar="NAME",
-                       help="robot model name (default: the robot the model was made for)")
-    robot.add_argument("--robot-file", metavar="F", help="robot model file (TOML)")
+    add_robot_arguments(parser, default=None, default_text="the robot the model was made for")
     parser.add_argument("--decls", action="append", default=[], metavar="FILE",
                         help="RAPID file declaring tooldata/wobjdata/robtargets the program "
                         "uses but does not declare (may be repeated)")

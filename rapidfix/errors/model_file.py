@@ -18,7 +18,6 @@ Loading checks the format tag, the version and, when asked, the robot.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -31,15 +30,6 @@ from rapidfix.exceptions import ModelError
 
 FORMAT = "rapidfix-model"
 VERSION = 1
-
-
-def file_sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a file's bytes (recorded for every measurement file a model used)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 16), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def model_to_dict(model: ErrorModel) -> dict[str, Any]:

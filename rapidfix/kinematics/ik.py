@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.ik_analytic import analytic_solver
 from rapidfix.kinematics.ik_numeric import refine
@@ -36,8 +37,6 @@ if TYPE_CHECKING:
 WRIST_TOL = 1e-7
 """|sin θ5| below which the wrist counts as singular (θ4 is then held)."""
 
-CHUNK = 4096
-"""Poses per numpy chunk: temporaries of a chunk stay in the L2/L3 cache."""
 LIMIT_TOL = 1e-9
 """rad by which an angle may pass a joint limit and still count as inside."""
 RIGID_TOL = 1e-6
@@ -236,7 +235,7 @@ def solve_all(
     wobj: WorkObject | np.ndarray | None = None,
     q_prev: np.ndarray | None = None,
     wrist_tol: float = WRIST_TOL,
-    chunk: int = CHUNK,
+    chunk: int = chunks.IK_SOLVE,
     backend: str | None = None,
 ) -> IKSolutions:
     """Every solution for poses T (N, 4, 4) (or (4, 4)), tool0 in the base frame.

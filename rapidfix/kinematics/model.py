@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.screws import current_axes, forward_pose, screw_rows
 
@@ -47,9 +48,6 @@ def as_pose_batch(T: np.ndarray) -> tuple[np.ndarray, bool]:
         raise KinematicsError(f"poses must have shape (N, 4, 4) or (4, 4), got {arr.shape}")
     return arr, single
 
-
-#: poses per chunk of `RobotModel.ik_conf` on large batches
-IK_CHUNK = 8192
 
 
 class RobotModel:
@@ -198,14 +196,14 @@ class RobotModel:
         from rapidfix.kinematics.confdata import select_by_conf
 
         T = np.asarray(T, dtype=float)
-        if ik_options or T.ndim != 3 or T.shape[0] <= IK_CHUNK:
+        if ik_options or T.ndim != 3 or T.shape[0] <= chunks.IK_CONF:
             return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
         # in chunks: the (poses × 8 branches) temporaries then stay small and are reused
         conf = np.broadcast_to(np.asarray(conf, dtype=int), (T.shape[0], 4))
         q = np.empty((T.shape[0], 6))
         status = np.empty(T.shape[0], dtype=np.int8)
-        for start in range(0, T.shape[0], IK_CHUNK):
-            rows = slice(start, start + IK_CHUNK)
+        for start in range(0, T.shape[0], chunks.IK_CONF):
+            rows = slice(start, start + chunks.IK_CONF)
             q[rows], status[rows] = select_by_conf(self, self.ik(T[rows]), conf[rows])
         return q, status
 

@@ -11,12 +11,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rapidfix.digest import sha256_bytes, sha256_file
 from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import load_model
 from rapidfix.exceptions import KinematicsError, ModelError
 from rapidfix.kinematics import load_robot
 from rapidfix.kinematics.ik import prepare
-from rapidfix.postprocess.header import sha256_bytes, sha256_file
 
 
 @dataclass

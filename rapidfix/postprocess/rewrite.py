@@ -30,6 +30,7 @@ import numpy as np
 
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
+from rapidfix.digest import sha256_bytes
 from rapidfix.errors.context import Context
 from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
 from rapidfix.gc_pause import cyclic_gc_paused
@@ -37,9 +38,9 @@ from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.conditions import ProgramConditions
-from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
+from rapidfix.postprocess.header import MARK, Header, read_header
 from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
-from rapidfix.postprocess.naming import NameAllocator
+from rapidfix.postprocess.naming import NameAllocator, identifier_counts
 from rapidfix.postprocess.path import (
     MIN_PATH_TOLERANCE_MM,
     Curves,
@@ -707,7 +708,7 @@ class _Rewriter:
             op = t.operand[row]
             if op.form == "name" and op.declaration is not None:
                 by_decl.setdefault(id(op.declaration), []).append(row)
-        uses = _identifier_counts(self.program.text)
+        uses = identifier_counts(self.program.text)
         replaced: set[int] = set()
         for rows in by_decl.values():
             decl = t.operand[rows[0]].declaration
@@ -861,13 +862,6 @@ def _module_indent(program: Program) -> str:
         if indent:
             return indent
     return "  "
-
-
-def _identifier_counts(text: str) -> dict[str, int]:
-    import re
-    from collections import Counter
-
-    return Counter(map(str.lower, re.findall(r"[A-Za-z][A-Za-z0-9_]*", text)))
 
 
 def _strip_old_header(editor: Editor, text: str) -> None:

@@ -34,7 +34,9 @@ from rapidfix.rapid.fastpath import (
     _GAP,
     _VALUE_TEXT,
     _WS,
+    TAIL_LIMIT,
     FastSyntaxBuilder,
+    Memo,
     NotFast,
     cached_extension,
     declaration_pattern,
@@ -77,7 +79,6 @@ _BULK_DECL = declaration_pattern(False)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
 _BULK_CALL = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
-_TAIL_LIMIT = 4096
 _EMPTY: dict[str, tuple[str, str]] = {}
 
 
@@ -97,8 +98,7 @@ class BulkProgram:
     calls: list[tuple[str, str, str]] = field(default_factory=list)
     #: (index of its first call, module, routine) of each run of calls, in order
     runs: list[tuple[int, str, str]] = field(default_factory=list)
-    _tails: dict[str, tuple[tuple[str, ...], dict[str, str | None]]] = field(
-        default_factory=dict, repr=False)
+    _tails: Memo = field(default_factory=lambda: Memo(TAIL_LIMIT), repr=False)
 
     def scope(self, i: int) -> tuple[str, str]:
         """(module, routine), lower case, of call i."""
@@ -113,8 +113,7 @@ class BulkProgram:
         parsed = self._tails.get(rest)
         if parsed is None:
             parsed = _tail_arguments(rest)
-            if len(self._tails) < _TAIL_LIMIT:
-                self._tails[rest] = parsed
+            self._tails.keep(rest, parsed)
         return ((first, *parsed[0]) if first else parsed[0]), parsed[1]
 
     def visible(self, module: str, routine: str) -> tuple[dict, dict]:

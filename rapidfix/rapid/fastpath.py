@@ -189,9 +189,26 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
 
 _DECL = declaration_pattern(True)
 
+class Memo(dict):
+    """The one cache policy of the fast path: pure results kept across tokens and files,
+    keyed by their text, emptied at once when `limit` entries are reached (a CAM program
+    repeats a few dozen texts, so a cleared cache refills at once)."""
+
+    __slots__ = ("limit",)
+
+    def __init__(self, limit: int) -> None:
+        super().__init__()
+        self.limit = limit
+
+    def keep(self, key: str, value: object) -> None:
+        """Store `value` under `key`, emptying the cache first when it is full."""
+        if len(self) >= self.limit:
+            self.clear()
+        self[key] = value
+
+
 # Groups of numbers recur in CAM programs ([0,0,0,0], [9E+09,...]); read each once.
-_GROUP_CACHE: dict[str, tuple[float, ...]] = {}
-_GROUP_CACHE_LIMIT = 65536
+_GROUP_CACHE: Memo = Memo(65536)
 
 
 def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
@@ -203,8 +220,8 @@ def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
         value = tuple(map(float, text.split(",")))
     except ValueError:
         raise NotFast(text) from None
-    if keep and len(_GROUP_CACHE) < _GROUP_CACHE_LIMIT:
-        _GROUP_CACHE[text] = value
+    if keep:
+        _GROUP_CACHE.keep(text, value)
     return value
 
 
@@ -301,7 +318,7 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
 _CALL_HEAD = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
 # Distinct argument tails kept (a CAM program has a few dozen).
-_TAIL_LIMIT = 4096
+TAIL_LIMIT = 4096
 
 # One argument of a tail, offsets relative to the tail: (kind, start, end,
 # optional name, value node type or None, value start, value end, what the node
@@ -360,7 +377,7 @@ class CallTail:
 
 
 # Distinct call tails kept across tokens and files (a CAM program has a few dozen).
-_TAILS: dict[str, CallTail] = {}
+_TAILS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
@@ -396,15 +413,13 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         tail = tails.get(tail_text)
         if tail is None:
             tail = CallTail(tail_text)
-            if len(tails) >= _TAIL_LIMIT:
-                tails.clear()
-            tails[tail_text] = tail
+            tails.keep(tail_text, tail)
         calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
                                tail, base + tail_at))
     return calls
 
 
-def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
+def shared_aggregate_value(text: str, rests: Memo) -> tuple:
     """aggregate_value(text), reading what follows a leading group once per distinct text.
 
     A CAM program's robtargets differ in their first group (the position) and
@@ -417,9 +432,7 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
             items = rests.get(rest)
             if items is None:
                 items = aggregate_value("[[0]" + rest)[1:]  # the same items after any group
-                if len(rests) >= _TAIL_LIMIT:
-                    rests.clear()
-                rests[rest] = items
+                rests.keep(rest, items)
             # a CAM program's positions rarely recur: not worth keeping
             return (_number_group(text[2:cut], keep=False), *items)
     return aggregate_value(text)
@@ -427,7 +440,7 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
 
 # What follows the leading group of an aggregate, read once (see shared_aggregate_value);
 # kept across tokens and files like the call tails.
-_RESTS: dict[str, tuple] = {}
+_RESTS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
@@ -475,15 +488,16 @@ def cached_extension(grammar: str) -> str:
     0.06 s); a command that checks one small file would spend a fifth of its time on
     it. The key covers the grammar, this module's source and Lark's version.
     """
-    import hashlib
     import os
     import tempfile
     from pathlib import Path
 
     import lark
 
+    from rapidfix.digest import sha256_bytes
+
     source = Path(__file__).read_bytes()
-    key = hashlib.sha256(grammar.encode() + source + lark.__version__.encode()).hexdigest()
+    key = sha256_bytes(grammar.encode() + source + lark.__version__.encode())
     user = getattr(os, "getuid", lambda: "user")()
     path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
     try:

@@ -16,6 +16,8 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
 from rapidfix.rapid.fastpath import (
+    TAIL_LIMIT,
+    Memo,
     NotFast,
     aggregate_value,
     fast_parser,
@@ -277,7 +279,7 @@ def read(fn, *args):
 @settings(max_examples=300, deadline=None)
 @given(st.lists(loose_aggregate(), min_size=1, max_size=4))
 def test_sharing_what_follows_a_leading_group_reads_the_same_values(texts):
-    rests: dict[str, tuple] = {}
+    rests = Memo(TAIL_LIMIT)
     for text in texts + ["[[1" + t[t.find("]"):] for t in texts if "]" in t[:-1]]:
         assert read(shared_aggregate_value, text, rests) == read(aggregate_value, text)
 
