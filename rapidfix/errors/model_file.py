@@ -24,7 +24,7 @@ from typing import Any
 
 from rapidfix import __version__
 from rapidfix.atomic import write_text_atomic
-from rapidfix.errors.effect import effect_from_dict
+from rapidfix.errors.effects import effect_from_dict
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import ModelError
 

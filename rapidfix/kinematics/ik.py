@@ -22,10 +22,11 @@ import numpy as np
 
 from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.batches import as_joint_batch, as_pose_batch
+from rapidfix.kinematics.frames import flange_target
 from rapidfix.kinematics.ik_analytic import analytic_solver
 from rapidfix.kinematics.ik_numeric import refine
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus, mask_dtype
-from rapidfix.kinematics.model import as_joint_batch, as_pose_batch
 from rapidfix.kinematics.screws import invert_transform
 
 if TYPE_CHECKING:
@@ -249,8 +250,6 @@ def solve_all(
     """
     Tb, _ = as_pose_batch(T)
     if tool is not None or wobj is not None:
-        from rapidfix.kinematics.frames import flange_target
-
         Tb = flange_target(Tb, tool, wobj)
     n = Tb.shape[0]
     prev = _prev_batch(q_prev, n)

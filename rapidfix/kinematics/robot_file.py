@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.frames import pose
+from rapidfix.kinematics.ik_analytic import check_structure
 from rapidfix.kinematics.model import RobotModel
 
 if sys.version_info >= (3, 11):
@@ -77,8 +79,6 @@ def parse_robot(data: dict, path: str) -> RobotModel:
     quat = _numbers(tool0, "quaternion", "tool0", path, 4)
     if abs(np.linalg.norm(quat) - 1.0) > 1e-6:
         raise _key_error(path, "tool0.quaternion", "not a unit quaternion (|q| must be 1 ± 1e-6)")
-    from rapidfix.kinematics.frames import pose
-
     model = RobotModel(
         name.strip(),
         np.array(dirs),
@@ -87,8 +87,6 @@ def parse_robot(data: dict, path: str) -> RobotModel:
         np.array(limits),
         source=path,
     )
-    from rapidfix.kinematics.ik_analytic import check_structure
-
     problem = check_structure(model)
     if problem is not None:
         raise _key_error(path, problem[0], problem[1])

@@ -16,7 +16,6 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
-- `demo_programs`, `ballbar_program`  the demo's step and the paper's ballbar program
 """
 
 from rapidfix.postprocess.compensator import Compensator

@@ -30,11 +30,11 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
-    _CALL_PIECE,
-    _GAP,
-    _VALUE_TEXT,
-    _WS,
+    CALL_PIECE,
+    GAP,
     TAIL_LIMIT,
+    VALUE_TEXT,
+    WS,
     FastSyntaxBuilder,
     Memo,
     NotFast,
@@ -78,7 +78,7 @@ def run_parser() -> Lark:
 _BULK_DECL = declaration_pattern(False)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
-_BULK_CALL = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?([^;]*);")
+_BULK_CALL = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?([^;]*);")
 _EMPTY: dict[str, tuple[str, str]] = {}
 
 
@@ -137,7 +137,7 @@ def _tail_arguments(text: str) -> tuple[tuple[str, ...], dict[str, str | None]]:
     """Required values and optional arguments in checked call text after the first value."""
     required: list[str] = []
     optional: dict[str, str | None] = {}
-    for piece in _CALL_PIECE.finditer(text):
+    for piece in CALL_PIECE.finditer(text):
         slash, option, option_value, value, _semi = piece.groups()
         if value is not None:
             required.append(value)

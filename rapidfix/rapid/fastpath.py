@@ -44,14 +44,14 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
-from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_value
+from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
-_WS = r"[ \t\f\v\r\n\x1a]"
+WS = r"[ \t\f\v\r\n\x1a]"
 # What may stand between two statements of a run: whitespace and whole-line comments
 # (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
 # cut short on backtracking, so nothing inside it is ever read as a statement).
-_GAP = rf"{_WS}*(?:![^\n]*\n{_WS}*)*"
+GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
 _WORD_END = r"(?![A-Za-z0-9_])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
 # for speed; its numbers are checked when they are read (_number_group). Runs of
@@ -60,9 +60,9 @@ _WORD_END = r"(?![A-Za-z0-9_])"
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
 # A value without a call, for splitting a token whose syntax has been checked already:
 # an aggregate, a negated number, a name or a number.
-_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{_WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
+_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
 # A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
-_VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{_WS}*\([^()]*\)|{_SIMPLE_TEXT}"
+VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|{_SIMPLE_TEXT}"
 
 
 class NotFast(Exception):
@@ -117,18 +117,18 @@ def _patterns() -> dict[str, str]:
     # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
     # written once where it can be: the contextual lexer compiles these patterns into
     # each of its scanners, at a cost that grows with their length.
-    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name})"
-    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
+    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
+    optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
     plain_argument = f"(?:{simple}|{optional})"
     # a further argument: after a comma, or an optional one right after the last
-    following = rf"(?:,{_WS}*|(?=\\))"
-    inner = (rf"\({_WS}*(?:{plain_argument}(?:{_WS}*{following}{plain_argument})*{_WS}*)?"
+    following = rf"(?:,{WS}*|(?=\\))"
+    inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
              rf"\)")
-    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name}(?:{_WS}*{inner})?)"
+    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{inner})?)"
     argument = f"(?:{value}|{optional})"
-    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following}{argument})*)?{_WS}*;"
-    decl = (f"(?i:(?:LOCAL{_WS}+)?(?:TASK{_WS}+)?(?:VAR|PERS|CONST)){_WS}+{type_name}{_WS}+"
-            f"{data_name}{_WS}*(?::={_WS}*{value}{_WS}*)?;")
+    call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
+            f"{data_name}{WS}*(?::={WS}*{value}{WS}*)?;")
     return {"call": call, "decl": decl}
 
 
@@ -150,8 +150,8 @@ def grammar_extension(grammar: str) -> str:
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
     # a run starts with a statement (the gap before the first matches nothing)
-    calls = f"(?=[A-Za-z])(?:{_GAP}{p['call']}){{1,{RUN_LIMIT}}}"
-    decls = f"(?=[A-Za-z])(?:{_GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
+    calls = f"(?=[A-Za-z])(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    decls = f"(?=[A-Za-z])(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (
@@ -167,9 +167,9 @@ def grammar_extension(grammar: str) -> str:
 
 # Splitting a call whose syntax the lexer has checked: after its name (or its
 # first argument), one piece is an optional argument, a required value or the ';'.
-_CALL_PIECE = re.compile(
-    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_VALUE_TEXT}))?"
-    rf"|({_VALUE_TEXT})|(;))"
+CALL_PIECE = re.compile(
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({VALUE_TEXT}))?"
+    rf"|({VALUE_TEXT})|(;))"
 )
 
 
@@ -180,10 +180,10 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         return f"({pattern})" if modifiers else pattern
 
     return re.compile(
-        rf"{_GAP}(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
-        rf"{group('(?i:VAR|PERS|CONST)')}{_WS}+"
-        rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
-        rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
+        rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
+        rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
+        rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
+        rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
 
 
@@ -251,7 +251,7 @@ def aggregate_value(text: str) -> tuple:
 # Splitting the inside of a checked function call: one piece is an optional
 # argument, a required value or the closing parenthesis.
 _INNER_PIECE = re.compile(
-    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_SIMPLE_TEXT}))?"
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
     rf"|({_SIMPLE_TEXT})|(\)))"
 )
 _WS_CHARS = " \t\f\v\r\n\x1a"
@@ -285,7 +285,7 @@ def _value_node(text: str, start: int) -> s.Expr:
     if first == "[":
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
-        return s.Number(start, end, _number(text), text)
+        return s.Number(start, end, number_value(text), text)
     if first == "-":
         rest = text[1:].lstrip(_WS_CHARS)
         operand = _value_node(rest, end - len(rest))
@@ -316,7 +316,7 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
+_CALL_HEAD = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
 # Distinct argument tails kept (a CAM program has a few dozen).
 TAIL_LIMIT = 4096
 
@@ -341,7 +341,7 @@ def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
 def _tail(text: str) -> tuple[_TailArgument, ...]:
     """The arguments in checked call text that follows a call's name or first argument."""
     entries: list[_TailArgument] = []
-    for piece in _CALL_PIECE.finditer(text):
+    for piece in CALL_PIECE.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
             node, at, end, fields = _value_entry(value, piece.start(4))

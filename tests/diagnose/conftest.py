@@ -17,13 +17,13 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from rapidfix.demo import measured_range, pick_and_place, run_on_robot
 from rapidfix.diagnose.run import diagnose
 from rapidfix.errors.fit import fit_error_model
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model_file import save_model
 from rapidfix.measure.registration import rigid_fit
 from rapidfix.measure.sweeps import analyse_sweeps
-from rapidfix.postprocess.closed_loop import measured_range, pick_and_place, run_on_robot
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.sim import VirtualRobot, simulate_set

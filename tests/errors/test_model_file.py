@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rapidfix.digest import sha256_file
-from rapidfix.errors.effect import effect_from_dict
+from rapidfix.errors.effects import effect_from_dict
 from rapidfix.errors.joint_rbf import JointRBF, fit_network
 from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import load_model, save_model

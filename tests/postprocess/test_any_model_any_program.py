@@ -25,7 +25,7 @@ from rapidfix.errors.candidates.joint_reference import JointReference
 from rapidfix.errors.candidates.registration import TrackerFrame, TrackerScale
 from rapidfix.errors.candidates.thermal import ThermalDrift
 from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.effect import registered_effects
+from rapidfix.errors.effects import registered_effects
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import RapidfixError
