@@ -25,7 +25,7 @@ from rapidfix.errors.fit import fit_error_model, sweep_gaps
 from rapidfix.errors.joint_rbf import JointRBF, OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import MeasurementError, ModelError
-from rapidfix.kinematics import RobotModel, load_robot
+from rapidfix.kinematics import RobotModel, is_shipped, load_robot
 from rapidfix.measure.files import (
     PointTable,
     Setup,
@@ -117,7 +117,7 @@ def fit_from_files(
     """Read the setup and sweeps, analyse the sweeps, fit the per-joint model."""
     from rapidfix.measure.sweeps import analyse_sweeps
 
-    setup = read_setup(setup_path)
+    setup = read_setup(setup_path, check_robot=robot is None)  # `robot` overrides the setup's
     robot_model = robot_for(setup, robot)
     tables = [read_sweeps(p, reach_mm=robot_reach_mm(robot_model)) for p in sweep_paths]
     analysis = analyse_sweeps(setup, merge_sweeps(tables), robot_model)
@@ -128,6 +128,8 @@ def fit_from_files(
     extra = {"sweep_analysis": _jsonable(analysis.report())}
     model = fit_error_model(robot_model.name, list(analysis.joints), data_files=data_files,
                             extra_statistics=extra, policy=policy)
+    if not is_shipped(robot_model):  # a user's robot file: the model carries the robot
+        model.robot_definition = robot_model.definition
     return FitOutcome(model, robot_model, setup, analysis)
 
 

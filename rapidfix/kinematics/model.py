@@ -28,8 +28,9 @@ class RobotModel:
 
     Attributes: `name`, `axis_dirs (6, 3)`, `axis_points (6, 3)` mm, `screws (6, 6)`
     rows (w, v = -w × q), `home (4, 4)` tool0 at θ = 0, `limits (6, 2)` rad,
-    `source` (the robot file), `nominal` (the model the analytic IK is built on;
-    the model itself unless made by `with_screws`). Joint values are the
+    `source` (the robot file), `definition` (its content as plain data), `nominal`
+    (the model the analytic IK is built on; the model itself unless made by
+    `with_screws`). Joint values are the
     controller's: ABB's zero and sign conventions are built into the screws.
     """
 
@@ -43,6 +44,7 @@ class RobotModel:
         *,
         source: str | Path | None = None,
         nominal: RobotModel | None = None,
+        definition: dict | None = None,
     ) -> None:
         dirs = np.asarray(axis_dirs, dtype=float)
         if dirs.shape != (6, 3) or np.asarray(axis_points).shape != (6, 3):
@@ -60,6 +62,9 @@ class RobotModel:
         self.screws = frozen(screw_rows(self.axis_dirs, self.axis_points))
         self.source = None if source is None else str(source)
         self.nominal = self if nominal is None else nominal
+        #: the robot file's content as plain data (name, joints, tool0), for a nominal
+        #: model read from one: what a model file stores to rebuild the robot
+        self.definition = definition
         self._analytic = None
 
     def __repr__(self) -> str:
