@@ -9,7 +9,7 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `chain`        where each move starts (the motion executed just before it)
 - `path`         MoveL/MoveC kept within a tolerance when they become joint moves
 - `naming`       collision-free RAPID identifiers for new data
-- `literals`     jointtarget / robtarget literals for many targets at once
+- `emission_forms` what the rewrite writes (literals, declarations, MoveAbsJ), fast forms
 - `header`       the header comment, and recognising a compensated program
 - `check_units`  the new statements and declarations, as a program of their own
 - `verify`       re-parse them (in bulk where simple) and predict where the robot will go

@@ -31,7 +31,7 @@ from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.literals import robtarget_literals
+from rapidfix.postprocess.emission_forms import robtarget_literals
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.sim.plans import point_plan
 
