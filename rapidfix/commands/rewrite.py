@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rapidfix.commands.robot_options import add_robot_arguments
-from rapidfix.exceptions import UsageError
+from rapidfix.exceptions import InvalidOption, RapidfixError, UsageError
 from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
@@ -60,18 +60,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+#: the command-line flag of each RewriteOptions field, for the command's own messages
+FLAGS = {"emit": "--emit", "path_tolerance_mm": "--path-tolerance",
+         "temperature_c": "--temperature"}
+
+
 def options_from_args(args: argparse.Namespace) -> RewriteOptions:
-    """RewriteOptions from parsed command-line arguments."""
+    """RewriteOptions from parsed command-line arguments; a bad value is refused in the
+    command's words (its flag), not the library's (its field name)."""
     from rapidfix.postprocess.rewrite import RewriteOptions
 
-    return RewriteOptions(
-        emit=args.emit,
-        path_tolerance_mm=args.path_tolerance,
-        strict=args.strict,
-        force=args.force,
-        temperature_c=args.temperature,
-        approach=args.approach,
-    )
+    try:
+        return RewriteOptions(
+            emit=args.emit,
+            path_tolerance_mm=args.path_tolerance,
+            strict=args.strict,
+            force=args.force,
+            temperature_c=args.temperature,
+            approach=args.approach,
+        )
+    except InvalidOption as err:
+        raise RapidfixError(f"{FLAGS.get(err.option, err.option)} {err.detail}") from None
 
 
 def run(args: argparse.Namespace) -> int:

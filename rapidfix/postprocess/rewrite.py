@@ -32,7 +32,11 @@ from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.digest import sha256_bytes
 from rapidfix.errors.context import Context
-from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
+from rapidfix.exceptions import (
+    InvalidOption,
+    OutputExistsError,
+    RapidSemanticError,
+)
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.check_units import CheckUnits
@@ -98,16 +102,17 @@ class RewriteOptions:
     approach: bool = False
 
     def __post_init__(self) -> None:
+        """Refuse values the rewrite cannot honour (InvalidOption names the field)."""
         if self.emit not in EMIT_CHOICES:
-            raise RapidfixError(f"--emit must be one of {', '.join(EMIT_CHOICES)}")
+            raise InvalidOption("emit", f"must be one of {', '.join(EMIT_CHOICES)}")
         if not (math.isfinite(self.path_tolerance_mm) and self.path_tolerance_mm > 0):
-            raise RapidfixError("--path-tolerance must be a positive number of mm")
+            raise InvalidOption("path_tolerance_mm", "must be a positive number of mm")
         if self.path_tolerance_mm < MIN_PATH_TOLERANCE_MM:
-            raise RapidfixError(
-                f"--path-tolerance {self.path_tolerance_mm:g} mm is below what the model can "
-                f"resolve; give at least {MIN_PATH_TOLERANCE_MM:g} mm")
+            raise InvalidOption(
+                "path_tolerance_mm", f"{self.path_tolerance_mm:g} mm is below what the model "
+                f"can resolve; give at least {MIN_PATH_TOLERANCE_MM:g} mm")
         if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
-            raise RapidfixError(f"--temperature {self.temperature_c:g} °C is not a cell "
+            raise InvalidOption("temperature_c", f"{self.temperature_c:g} °C is not a cell "
                                 "temperature (give degrees Celsius, -50 to 150)")
 
 
