@@ -197,7 +197,7 @@ def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
 
 
 def test_function_calls_and_negated_numbers_are_read_in_runs():
-    from rapidfix.rapid.bulk import Run, run_parser
+    from rapidfix.rapid.readback import Run, run_parser
 
     tree = run_parser().parse(FAST["function calls and negated numbers"])
     body = tree.modules[0].items[0].body
@@ -205,7 +205,7 @@ def test_function_calls_and_negated_numbers_are_read_in_runs():
 
 
 def test_comments_between_statements_stay_in_one_run():
-    from rapidfix.rapid.bulk import Run, read_bulk, run_parser
+    from rapidfix.rapid.readback import Run, read_bulk, run_parser
 
     text = FAST["comments between statements"]
     module = run_parser().parse(text).modules[0]

@@ -1,4 +1,14 @@
-"""Parse a program of simple statements and read its data and calls in bulk.
+"""Read a rewritten program back: in bulk where its statements are simple, else through
+the full program model, with the one name-lookup rule of RAPID data.
+
+This module owns the read-back: `read_targets_in_bulk` (the bulk reader below),
+`read_targets_full` (its fallback, from the program model's motions) and the scope
+rule (`rapidfix.rapid.scope`: `find_visible`, `visible_names`) that the program model
+(`model_builder`, `Program.declaration`) and the bulk reader share; it sits in a module
+of its own so that parsing a program does not load what reading back needs (numpy).
+
+The bulk reader: parse a program of simple statements and read its data and calls
+in bulk.
 
 Reading back a rewritten CAM program means parsing a hundred thousand new
 declarations and calls and finding, for each call, the values it names. The
@@ -23,11 +33,13 @@ import functools
 import re
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from lark import Lark, Tree, v_args
 from lark.exceptions import UnexpectedInput
 
+from rapidfix.exceptions import RapidSemanticError
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     CALL_PIECE,
@@ -38,10 +50,18 @@ from rapidfix.rapid.fastpath import (
     FastSyntaxBuilder,
     Memo,
     NotFast,
+    aggregate_value,
     cached_extension,
     declaration_pattern,
 )
 from rapidfix.rapid.grammar import grammar_text
+from rapidfix.rapid.instructions import motion_spec
+from rapidfix.rapid.scope import find_visible, visible_names
+from rapidfix.rapid.values import fits_type
+
+if TYPE_CHECKING:
+    from rapidfix.rapid.program import MotionInstruction
+
 
 
 @dataclass(slots=True, eq=False)
@@ -127,9 +147,7 @@ class BulkProgram:
 
     def lookup(self, module: str, routine: str, name: str) -> tuple[str, str | None] | None:
         """A name as a call in `routine` of `module` sees it: routine data, then module data."""
-        key = name.lower()
-        local, module_data = self.visible(module, routine)
-        found = local.get(key) or module_data.get(key)
+        found = find_visible(name.lower(), *self.visible(module, routine))
         return None if found is None else (found[0], found[1] or None)
 
 
@@ -228,3 +246,203 @@ def read_bulk(text: str) -> BulkProgram | None:
             else:
                 return None
     return reader.program
+
+
+# ---------------------------------------------------------------- targets read back
+@dataclass(frozen=True)
+class ReadBack:
+    """The targets the output commands, per checked pose (rows of `Expected`):
+    `joint` (K,) True for a jointtarget, else a robtarget; `robax` (K,6) degrees of
+    the jointtargets; `trans` (K,3), `rot` (K,4), `conf` (K,4) of the robtargets
+    (rows of the other kind hold zeros)."""
+
+    joint: np.ndarray
+    robax: np.ndarray
+    trans: np.ndarray
+    rot: np.ndarray
+    conf: np.ndarray
+
+    @classmethod
+    def empty(cls, k: int) -> ReadBack:
+        return cls(np.zeros(k, bool), np.zeros((k, 6)), np.zeros((k, 3)), np.zeros((k, 4)),
+                   np.zeros((k, 4)))
+
+
+class NotBulk(Exception):
+    """The bulk reader met a target it does not read (the full route decides)."""
+
+
+_JOINT_LITERAL = re.compile(r"\[\[([-+0-9.eE,]*)\],\[([-+0-9.eE,]*)\]\]")
+
+
+def _read_bulk_targets(bulk: BulkProgram, order: list[int], motion: np.ndarray,
+                       slot: np.ndarray) -> ReadBack:
+    calls = bulk.calls
+    if len(calls) != len(order):
+        raise NotBulk
+    index_of = [0] * len(order)  # statement id -> its call
+    for i, ident in enumerate(order):
+        index_of[ident] = i
+    k = motion.shape[0]
+    out = ReadBack.empty(k)
+    call_of_row = np.asarray(index_of)[motion].tolist() if k else []
+    run_of_row = (np.searchsorted([r[0] for r in bulk.runs], call_of_row, side="right") - 1
+                  ).tolist() if k else []
+    scopes = bulk.run_scopes()  # per run of calls: the routine's data, then the module's
+    if k and len(set(map(id, (d for pair in scopes for d in pair)))) <= 2:
+        quick = _jointtargets_named_first(bulk, call_of_row, slot, scopes[0])
+        if quick is not None:
+            return quick
+    layouts: dict[str, tuple[tuple[int, ...], str]] = {}
+    joint_rows: list[int] = []
+    joint_texts: list[str] = []
+    rob_values: dict[str, tuple] = {}
+    for i, (c, run, which) in enumerate(zip(call_of_row, run_of_row, slot.tolist())):
+        name, first, _rest = calls[c]
+        layout = layouts.get(name)
+        if layout is None:
+            spec = motion_spec(name)
+            if spec is None:
+                raise NotBulk
+            layout = layouts[name] = (
+                tuple(spec.parameters.index(p) for p in spec.target_parameters),
+                spec.target_kind)
+        where, inline_type = layout
+        if which >= len(where):
+            raise NotBulk
+        position = where[which]
+        if position == 0 and first:
+            text = first
+        else:
+            required = bulk.arguments(c)[0]
+            if position >= len(required):
+                raise NotBulk
+            text = required[position]
+        if text[0] == "[":
+            type_name = inline_type
+        else:
+            key = text.lower()
+            found = find_visible(key, *scopes[run])
+            if found is None or not found[1]:
+                raise NotBulk
+            type_name, text = found
+        if type_name == "jointtarget":
+            joint_rows.append(i)
+            joint_texts.append(text)
+        elif type_name == "robtarget":
+            value = rob_values.get(text)
+            if value is None:
+                value = rob_values[text] = _robtarget_value(text)
+            out.trans[i], out.rot[i], out.conf[i] = value
+        else:
+            raise NotBulk
+    if joint_rows:
+        out.joint[joint_rows] = True
+        out.robax[joint_rows] = joint_values(joint_texts)
+    return out
+
+
+def _jointtargets_named_first(bulk: BulkProgram, call_of_row: list[int], slot: np.ndarray,
+                              scope: tuple[dict, dict]) -> ReadBack | None:
+    """The usual case at list speed: every checked pose is a jointtarget data name written
+    as the first argument of a call whose first parameter is its target, all calls in one
+    scope. None when that is not so (the general loop decides)."""
+    calls = bulk.calls
+    rows = [calls[c] for c in call_of_row]
+    if slot.any() or not all(first for _, first, _ in rows):
+        return None
+    for name in {name for name, _, _ in rows}:
+        spec = motion_spec(name)
+        if spec is None or spec.target_kind != "jointtarget" or not spec.target_parameters \
+                or spec.parameters.index(spec.target_parameters[0]) != 0:
+            return None
+    names = visible_names(*scope)  # routine data first, then the module's
+    found = list(map(names.get, [first.lower() for _, first, _ in rows]))
+    if None in found or any(type_name != "jointtarget" or not text
+                            for type_name, text in found):
+        return None
+    out = ReadBack.empty(len(rows))
+    out.joint[:] = True
+    out.robax[:] = joint_values([text for _, text in found])
+    return out
+
+
+def _robtarget_value(text: str) -> tuple:
+    try:
+        value = aggregate_value(text)
+    except NotFast:
+        raise NotBulk from None
+    if not fits_type("robtarget", value):  # the full route decides
+        raise NotBulk
+    return value[:3]
+
+
+def joint_values(texts: list[str]) -> np.ndarray:
+    """Robot axes (K,6) of jointtarget literals `[[j1..j6],[e1..e6]]`, read in one pass."""
+    match = _JOINT_LITERAL.fullmatch
+    groups = []
+    extax_ok: dict[str, bool] = {}
+    for text in texts:
+        m = match(text)
+        if m is None:
+            raise NotBulk
+        robax, extax = m.groups()
+        ok = extax_ok.get(extax)
+        if ok is None:
+            ok = extax_ok[extax] = extax.count(",") == 5 and _numbers(extax)
+        if not ok or robax.count(",") != 5:
+            raise NotBulk
+        groups.append(robax)
+    try:
+        values = np.array(",".join(groups).split(","), dtype=float).reshape(-1, 6)
+    except ValueError:
+        raise NotBulk from None
+    if not np.isfinite(values).all():  # the full route decides (and reports) those
+        raise NotBulk
+    return values
+
+
+def _numbers(group: str) -> bool:
+    try:
+        tuple(map(float, group.split(",")))
+    except ValueError:
+        return False
+    return True
+
+
+def read_targets_full(motions: list[MotionInstruction], motion: np.ndarray,
+                      slot: np.ndarray) -> ReadBack:
+    """The fallback: the targets read from the motions of the full program model
+    (`motions`, by statement id), row i being target `slot[i]` of motion `motion[i]`."""
+    k = motion.shape[0]
+    out = ReadBack.empty(k)
+    for i, (m, which) in enumerate(zip(motion.tolist(), slot.tolist())):
+        operand = motions[m].targets[which]
+        value = operand.value if operand.static else None
+        if value is None or operand.type_name not in ("jointtarget", "robtarget"):
+            raise RapidSemanticError(
+                f"rewritten target {operand.text!r} cannot be read back: {operand.reason}",
+                file=motions[m].span.file, line=motions[m].span.line,
+                hint="please report this as a rapidfix bug")
+        # raw values, already checked against their type by the RAPID layer
+        if operand.type_name == "jointtarget":
+            out.joint[i] = True
+            out.robax[i] = value[0]
+        else:
+            out.trans[i], out.rot[i], out.conf[i] = value[:3]
+    return out
+
+
+def read_targets_in_bulk(text: str, order: list[int], motion: np.ndarray,
+                         slot: np.ndarray) -> ReadBack | None:
+    """The targets of a program of simple statements read in bulk: row i is target
+    `slot[i]` of the call that is statement `motion[i]` (`order`: the statement id of
+    each call, in text order). None when the bulk reader does not take the text or a
+    target (`read_targets_full` decides then)."""
+    bulk = read_bulk(text)
+    if bulk is None:
+        return None
+    try:
+        return _read_bulk_targets(bulk, order, motion, slot)
+    except NotBulk:
+        return None
