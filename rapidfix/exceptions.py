@@ -82,5 +82,18 @@ class UsageError(RapidfixError):
     (exit status 2)."""
 
 
+class InvalidOption(RapidfixError):
+    """An option of a library call is out of range; `option` names it, `detail` says why.
+
+    The message names the option as the library does (`path_tolerance_mm must be …`);
+    a command line words it with its own flag (`--path-tolerance must be …`).
+    """
+
+    def __init__(self, option: str, detail: str) -> None:
+        super().__init__(f"{option} {detail}")
+        self.option = option
+        self.detail = detail
+
+
 class RapidfixWarning(UserWarning):
     """A warning for the user: the CLI prints it as `rapidfix: warning: …` (exit status 3)."""

@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
+from rapidfix.digest import sha256_file
 from rapidfix.errors.compensate import solve_compensation
 from rapidfix.errors.context import Context
 from rapidfix.errors.fit import fit_error_model, sweep_gaps
 from rapidfix.errors.joint_rbf import JointRBF, OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import file_sha256
 from rapidfix.exceptions import MeasurementError, ModelError
-from rapidfix.kinematics import RobotModel, load_robot
+from rapidfix.kinematics import RobotModel, is_shipped, load_robot
 from rapidfix.measure.files import (
     PointTable,
     Setup,
@@ -117,17 +117,19 @@ def fit_from_files(
     """Read the setup and sweeps, analyse the sweeps, fit the per-joint model."""
     from rapidfix.measure.sweeps import analyse_sweeps
 
-    setup = read_setup(setup_path)
+    setup = read_setup(setup_path, check_robot=robot is None)  # `robot` overrides the setup's
     robot_model = robot_for(setup, robot)
     tables = [read_sweeps(p, reach_mm=robot_reach_mm(robot_model)) for p in sweep_paths]
     analysis = analyse_sweeps(setup, merge_sweeps(tables), robot_model)
-    data_files = [{"name": Path(setup_path).name, "sha256": file_sha256(setup_path),
+    data_files = [{"name": Path(setup_path).name, "sha256": sha256_file(setup_path),
                    "role": "setup"}]
-    data_files += [{"name": Path(p).name, "sha256": file_sha256(p), "role": "sweeps"}
+    data_files += [{"name": Path(p).name, "sha256": sha256_file(p), "role": "sweeps"}
                    for p in sweep_paths]
     extra = {"sweep_analysis": _jsonable(analysis.report())}
     model = fit_error_model(robot_model.name, list(analysis.joints), data_files=data_files,
                             extra_statistics=extra, policy=policy)
+    if not is_shipped(robot_model):  # a user's robot file: the model carries the robot
+        model.robot_definition = robot_model.definition
     return FitOutcome(model, robot_model, setup, analysis)
 
 

@@ -38,7 +38,7 @@ from rapidfix.campaign.timing import (
 )
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import RobotModel
-from rapidfix.measure.files import _toml_value
+from rapidfix.measure.files import toml_value
 
 APPROACH_MODES = ("same", "both", "none")
 
@@ -282,9 +282,9 @@ def write_plan(plan: Plan, out_dir: str | Path, *, program_name: str = "measure.
         "orient_speed_deg_s": m.orient_speed_deg_s, "joint_speed_pct": m.joint_speed_pct,
         "accel_s": m.accel_s, "approach": st.approach, "seed": st.seed}
     lines = ["# rapidfix plan: what `rapidfix import` and `rapidfix simulate --program` read"]
-    lines += [f"{k} = {_toml_value(v)}" for k, v in meta.items()]
+    lines += [f"{k} = {toml_value(v)}" for k, v in meta.items()]
     if plan.cube is not None:
-        lines += ["", "[iso9283]", f"centre_mm = {_toml_value(plan.cube.centre_mm.tolist())}",
+        lines += ["", "[iso9283]", f"centre_mm = {toml_value(plan.cube.centre_mm.tolist())}",
                   f"side_mm = {float(plan.cube.side_mm)!r}", f"cycles = {st.iso_cycles}"]
     write_text_atomic(paths["plan"], "\n".join(lines) + "\n")
     return paths

@@ -27,7 +27,7 @@ from rapidfix.campaign.sight import TrackerView
 from rapidfix.campaign.timing import rated_joint_speed
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import RobotModel
-from rapidfix.sim.plans import _longest_run, plausible_poses
+from rapidfix.sim.plans import longest_run, plausible_poses
 
 #: The held pose tried first for every sweep (the virtual cell's), deg.
 DEFAULT_HOLD_DEG = (0.0, 0.0, 0.0, 0.0, 45.0, 0.0)
@@ -109,7 +109,7 @@ def sweep_block(robot: RobotModel, smr_mm: np.ndarray, *, step_deg: float = 5.0,
         dirs, points = robot.joint_frames(q)
         ball = ball_positions(robot, q, smr)
         radius = np.linalg.norm(np.cross(ball - points[:, j], dirs[:, j]), axis=1).reshape(C, G)
-        runs = np.array([_longest_run(m) for m in ok])
+        runs = np.array([longest_run(m) for m in ok])
         count = runs.sum(axis=1)
         r_min = np.where(runs, radius, np.inf).min(axis=1)
         score = count * np.minimum(1.0, np.where(count > 0, r_min, 0.0) / GOOD_RADIUS_MM)

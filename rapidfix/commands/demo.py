@@ -108,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     # post-processor step: rewrite the sample programs (the ballbar among them) with the
     # fitted model and run original and rewritten on the virtual robot
     steps.set_postfix_str("rewriting and running the sample programs")
-    from rapidfix.postprocess.demo_programs import format_table, rewrite_and_run
+    from rapidfix.demo import format_table, rewrite_and_run
 
     programs = rewrite_and_run(None, out / "programs", model_path, virtual)
     steps.update()
@@ -122,19 +122,19 @@ def run(args: argparse.Namespace) -> int:
     print(f"report data:  {json_path}")
     print(format_table(programs))
     # closing the loop: a robot with a hidden effect, its per-joint fit, the diagnosis
-    from rapidfix.diagnose.demo import demo_loop, format_demo
+    from rapidfix.demo import demo_loop, format_demo
 
     loop = demo_loop(out / "diagnosis", seed=args.seed)
     print(format_demo(loop))
     # the loop on the robot: a cell program rewritten with each model, run as it executes
-    from rapidfix.postprocess.closed_loop import demo_on_robot, format_on_robot
+    from rapidfix.demo import demo_on_robot, format_on_robot
 
     models = {"per-joint model": loop["files"]["per_joint_model"],
               "diagnosed model": loop["files"]["model"]}
     print(format_on_robot(demo_on_robot(out / "diagnosis" / "measurements", models,
                                         out / "diagnosis" / "programs", args.seed)))
     # the measurement campaign: the ISO 9283 cube planned, run, compensated and checked
-    from rapidfix.campaign.demo import demo_campaign, format_campaign
+    from rapidfix.demo import demo_campaign, format_campaign
 
     print(format_campaign(demo_campaign(out / "campaign", model_path, args.seed)))
     for text in warned:

@@ -48,9 +48,9 @@ def run(args: argparse.Namespace) -> int:
 
     smr = None
     if args.smr_offset:
-        from rapidfix.commands.plan import _numbers
+        from rapidfix.commands.plan import parse_numbers
 
-        smr = _numbers(args.smr_offset, 3, "--smr-offset")
+        smr = parse_numbers(args.smr_offset, 3, "--smr-offset")
     columns = [c.strip().lower() for c in args.columns.split(",")] if args.columns else None
     result = import_export(args.export, args.poses, args.output, mode=args.match,
                            units=args.units, columns=columns,

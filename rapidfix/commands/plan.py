@@ -9,7 +9,7 @@ import numpy as np
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 
 
-def _numbers(text: str, n: int | None, what: str) -> list[float]:
+def parse_numbers(text: str, n: int | None, what: str) -> list[float]:
     try:
         values = [float(v) for v in text.replace(";", ",").split(",") if v.strip()]
     except ValueError:
@@ -24,7 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `plan` command."""
     from rapidfix.campaign.plan import APPROACH_MODES
     from rapidfix.campaign.program import TRIGGERS
-    from rapidfix.kinematics.cli_args import add_robot_arguments
+    from rapidfix.commands.robot_options import add_robot_arguments
 
     p = subparsers.add_parser(
         "plan",
@@ -109,16 +109,16 @@ def _settings(args: argparse.Namespace):
     from rapidfix.campaign.timing import MotionSettings
     from rapidfix.kinematics.frames import pose
 
-    smr = _numbers(args.smr_offset, 3, "--smr-offset")
-    joints = tuple(int(v) for v in _numbers(args.joints, None, "--joints")) if \
+    smr = parse_numbers(args.smr_offset, 3, "--smr-offset")
+    joints = tuple(int(v) for v in parse_numbers(args.joints, None, "--joints")) if \
         args.joints.strip() else ()
     if any(j < 1 or j > 6 for j in joints):
         raise RapidfixError("--joints takes joint numbers 1 to 6")
     ranges = {}
     for text in args.sweep_range:
         parts = text.split(":")
-        values = _numbers(",".join(parts), 3, "--sweep-range J:LO:HI") if len(parts) == 3 \
-            else _numbers(text, 3, "--sweep-range J:LO:HI")
+        values = parse_numbers(",".join(parts), 3, "--sweep-range J:LO:HI") if len(parts) == 3 \
+            else parse_numbers(text, 3, "--sweep-range J:LO:HI")
         ranges[int(values[0])] = (values[1], values[2])
     for name, value, low in (("--step", args.step, 0.5), ("--repeats", args.repeats, 1),
                              ("--iso-cycles", args.iso_cycles, 2), ("--speed", args.speed, 1),
@@ -132,12 +132,12 @@ def _settings(args: argparse.Namespace):
         raise RapidfixError("--joint-speed is a share of the rated speed: at most 100 %")
     if args.calibration_points < 0 or args.validation_points < 0:
         raise RapidfixError("point counts must not be negative")
-    payloads = tuple(_numbers(args.payload, None, "--payload"))
+    payloads = tuple(parse_numbers(args.payload, None, "--payload"))
     if any(v < 0 for v in payloads) or args.sweep_payload < 0:
         raise RapidfixError("payloads must not be negative")
     frame = np.eye(4)
     if args.box_frame:
-        v = _numbers(args.box_frame, 7, "--box-frame")
+        v = parse_numbers(args.box_frame, 7, "--box-frame")
         frame = pose(v[:3], v[3:])
     envelope = Envelope(box=Box.parse(args.box) if args.box else None, frame=frame,
                         floor_z_mm=args.floor,
@@ -145,10 +145,10 @@ def _settings(args: argparse.Namespace):
                         margin_mm=args.margin)
     view = None
     if args.tracker:
-        normal = _numbers(args.smr_normal, 3, "--smr-normal") if args.smr_normal else smr
+        normal = parse_numbers(args.smr_normal, 3, "--smr-normal") if args.smr_normal else smr
         if np.linalg.norm(normal) == 0:
             raise RapidfixError("--smr-normal (or the ball offset) must not be zero")
-        view = TrackerView(np.array(_numbers(args.tracker, 3, "--tracker")), np.array(normal),
+        view = TrackerView(np.array(parse_numbers(args.tracker, 3, "--tracker")), np.array(normal),
                            args.acceptance)
     motion = MotionSettings(tcp_speed_mm_s=args.speed, orient_speed_deg_s=args.orient_speed,
                             joint_speed_pct=args.joint_speed, settle_s=args.settle,
@@ -159,7 +159,7 @@ def _settings(args: argparse.Namespace):
         n_calibration=args.calibration_points, n_validation=args.validation_points,
         payloads_kg=payloads, envelope=envelope, tracker=view, iso=args.iso,
         iso_cycles=args.iso_cycles,
-        iso_centre_mm=tuple(_numbers(args.iso_centre, 3, "--iso-centre"))
+        iso_centre_mm=tuple(parse_numbers(args.iso_centre, 3, "--iso-centre"))
         if args.iso_centre else None,
         iso_side_mm=args.iso_side, approach=args.approach, approach_deg=args.approach_deg,
         seed=args.seed,
@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rapidfix.campaign.plan import make_plan, write_plan
-    from rapidfix.kinematics.cli_args import robot_from_args
+    from rapidfix.commands.robot_options import robot_from_args
 
     out = Path(args.out_dir)
     names = ("measure.mod", "poses.csv", "plan.toml")

@@ -7,7 +7,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rapidfix.exceptions import UsageError
+from rapidfix.commands.robot_options import add_robot_arguments
+from rapidfix.exceptions import InvalidOption, RapidfixError, UsageError
 from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
@@ -18,10 +19,7 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by `rewrite` and `batch`."""
     parser.add_argument("--model", required=True, metavar="MODEL",
                         help="error model file (from `rapidfix fit` or `rapidfix diagnose`)")
-    robot = parser.add_mutually_exclusive_group()
-    robot.add_argument("--robot", metavar="NAME",
-                       help="robot model name (default: the robot the model was made for)")
-    robot.add_argument("--robot-file", metavar="F", help="robot model file (TOML)")
+    add_robot_arguments(parser, default=None, default_text="the robot the model was made for")
     parser.add_argument("--decls", action="append", default=[], metavar="FILE",
                         help="RAPID file declaring tooldata/wobjdata/robtargets the program "
                         "uses but does not declare (may be repeated)")
@@ -62,18 +60,27 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
+#: the command-line flag of each RewriteOptions field, for the command's own messages
+FLAGS = {"emit": "--emit", "path_tolerance_mm": "--path-tolerance",
+         "temperature_c": "--temperature"}
+
+
 def options_from_args(args: argparse.Namespace) -> RewriteOptions:
-    """RewriteOptions from parsed command-line arguments."""
+    """RewriteOptions from parsed command-line arguments; a bad value is refused in the
+    command's words (its flag), not the library's (its field name)."""
     from rapidfix.postprocess.rewrite import RewriteOptions
 
-    return RewriteOptions(
-        emit=args.emit,
-        path_tolerance_mm=args.path_tolerance,
-        strict=args.strict,
-        force=args.force,
-        temperature_c=args.temperature,
-        approach=args.approach,
-    )
+    try:
+        return RewriteOptions(
+            emit=args.emit,
+            path_tolerance_mm=args.path_tolerance,
+            strict=args.strict,
+            force=args.force,
+            temperature_c=args.temperature,
+            approach=args.approach,
+        )
+    except InvalidOption as err:
+        raise RapidfixError(f"{FLAGS.get(err.option, err.option)} {err.detail}") from None
 
 
 def run(args: argparse.Namespace) -> int:

@@ -38,7 +38,7 @@ def add_program_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_program_command(args: argparse.Namespace) -> int:
     """Run the program on the virtual robot, write the export and truth.json."""
-    from rapidfix.sim.campaign_run import ExportOptions, simulate_program
+    from rapidfix.demo import ExportOptions, simulate_program
 
     if not (args.program and args.poses):
         raise RapidfixError("--program and --poses go together")

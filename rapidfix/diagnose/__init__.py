@@ -8,5 +8,5 @@ predicted change and the share of the validation residual explained), add the
 accepted ones greedily and save the refitted model; `report` writes the
 before/after report with the evidence, `features`/`plots` the residual against
 what exposed each effect.
-`demo.demo_loop` shows the whole loop on a virtual robot with one hidden effect.
+`rapidfix.demo.demo_loop` shows the whole loop on a virtual robot with one hidden effect.
 """

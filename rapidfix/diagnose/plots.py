@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
-from rapidfix.report.figures import AFTER_COLOUR, BEFORE_COLOUR, Figure, _list, _png
+from rapidfix.report.figures import AFTER_COLOUR, BEFORE_COLOUR, Figure, finite_list, png_bytes
 
 
 def evidence_figure(kind: str, feature: np.ndarray, label: str, residual_mm: np.ndarray,
@@ -41,7 +41,8 @@ def evidence_figure(kind: str, feature: np.ndarray, label: str, residual_mm: np.
         "Validation points (never fitted). Red: what the model before this effect missed, "
         "taken along the direction in which adding the effect moved the prediction; blue: "
         "that correction; grey: what is left along the same direction.",
-        {"feature_label": label, "feature": _list(x), "residual_before_mm": _list(residual_mm),
-         "correction_mm": _list(predicted_mm), "residual_after_mm": _list(after_mm)},
-        _png(fig),
+        {"feature_label": label, "feature": finite_list(x),
+         "residual_before_mm": finite_list(residual_mm),
+         "correction_mm": finite_list(predicted_mm), "residual_after_mm": finite_list(after_mm)},
+        png_bytes(fig),
     )

@@ -19,9 +19,10 @@ from rapidfix.diagnose.data import measured_points, noise_sigma_mm, with_known_h
 from rapidfix.diagnose.gauges import resolve_flange_gauge
 from rapidfix.diagnose.report import build_report, statement, trial_record
 from rapidfix.diagnose.selection import Selection, select
+from rapidfix.digest import sha256_file
 from rapidfix.errors.fit_effects import MeasuredPoints
 from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import file_sha256, load_model, save_model
+from rapidfix.errors.model_file import load_model, save_model
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, load_robot
 from rapidfix.measure.files import (
@@ -145,9 +146,9 @@ def diagnose_files(model_path: str | Path, setup_path: str | Path,
     reach = robot_reach_mm(robot_model)
     calibration = read_points(calibration_path, reach_mm=reach)
     validation = read_points(validation_path, reach_mm=reach)
-    files = [{"name": Path(calibration_path).name, "sha256": file_sha256(calibration_path),
+    files = [{"name": Path(calibration_path).name, "sha256": sha256_file(calibration_path),
               "role": "calibration"},
-             {"name": Path(validation_path).name, "sha256": file_sha256(validation_path),
+             {"name": Path(validation_path).name, "sha256": sha256_file(validation_path),
               "role": "validation (scoring only, never fitted)"}]
     result = diagnose(model, robot_model, setup, calibration, validation,
                       candidates=candidates, data_files=files, progress=progress)

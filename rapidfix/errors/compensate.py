@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rapidfix import chunks
 from rapidfix.errors.context import EMPTY, Context
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import ModelError
@@ -36,8 +37,6 @@ _LENGTH_SCALE_MM = 1000.0
 _DAMPING = 1e-14
 #: squared scaled pose error of a pose that matches to round-off (1e-9 rad, 1e-6 mm)
 _MATCHED_COST = 1e-18
-CHUNK = 4096
-"""Poses per chunk of the per-joint solve: its temporaries stay in the cache."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +78,7 @@ def solve_per_joint(
     *,
     tol_deg: float = TOL_DEG,
     max_iter: int = _MAX_ITER,
-    chunk: int = CHUNK,
+    chunk: int = chunks.COMPENSATE,
 ) -> CompensationResult:
     """Solve θc + Δθ(θc) = θ_ideal joint by joint (Newton, fixed-point fallback).
 

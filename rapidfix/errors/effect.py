@@ -24,7 +24,7 @@ generic least-squares fitter can therefore stack the vectors of all free effects
 the effects are. Internal units are radians and mm, like the rest of the model.
 
 Serialisation. `to_dict()` returns plain JSON data with a `"type"` key;
-`effect_from_dict(d)` rebuilds any registered effect. A subclass registers
+`rapidfix.errors.effects.effect_from_dict(d)` rebuilds any registered effect. A subclass registers
 itself by defining a unique class attribute `type_name` (via
 `__init_subclass__`), so adding an effect is writing one class in one module and
 importing it in `rapidfix.errors.effects` (the registry's import list).
@@ -218,16 +218,16 @@ class Effect:
         return f"{self.name} ({self.type_name}, {len(self.param_names)} parameters)"
 
 
-def registered_effects() -> dict[str, type[Effect]]:
-    """Type name → class of every registered effect."""
-    import rapidfix.errors.effects  # noqa: F401  (imports every effect module)
-
+def defined_effects() -> dict[str, type[Effect]]:
+    """Type name → class of every Effect subclass defined so far (the modules imported);
+    `rapidfix.errors.effects.registered_effects` imports them all first."""
     return dict(_REGISTRY)
 
 
-def effect_from_dict(data: dict[str, Any], where: str = "effect") -> Effect:
-    """Rebuild an effect from `to_dict()` output; ModelError names the bad key."""
-    types = registered_effects()
+def build_effect(data: dict[str, Any], types: dict[str, type[Effect]],
+                 where: str = "effect") -> Effect:
+    """Rebuild an effect of one of `types` from `to_dict()` output; ModelError names the
+    bad key (`rapidfix.errors.effects.effect_from_dict` passes every registered type)."""
     try:
         kind = data["type"]
         name = data.get("name", kind)

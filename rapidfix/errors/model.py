@@ -45,12 +45,15 @@ class ErrorModel:
 
     `data_files` lists {"name", "sha256", "role"} of every measurement file used;
     `statistics` is free-form JSON (per-joint CV RMS, residuals, …) written by the fitter.
+    `robot_definition` is the robot itself (a robot file's content) when it is not one
+    rapidfix ships, so that the model reloads without that file.
     """
 
     robot: str
     effects: list[Effect] = field(default_factory=list)
     statistics: dict[str, Any] = field(default_factory=dict)
     data_files: list[dict[str, str]] = field(default_factory=list)
+    robot_definition: dict[str, Any] | None = None
 
     # -- structure ----------------------------------------------------------------
     def effect(self, name: str) -> Effect:

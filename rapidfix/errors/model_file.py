@@ -9,8 +9,12 @@ Layout (version 1):
       "rapidfix_version": "0.1.0",
       "effects": [ {"type": "joint_rbf", "name": ..., "params": {...}, "state": {...}}, ...],
       "data": [ {"name": "sweeps.csv", "sha256": "…", "role": "sweeps"}, ...],
-      "statistics": { ... per-joint CV RMS, residuals ... }
+      "statistics": { ... per-joint CV RMS, residuals ... },
+      "robot_definition": { "name", "joint": [...], "tool0": {...} }   (optional)
     }
+
+`robot_definition` holds the robot file's content (screws, limits, tool0) when the
+model was fitted for a robot rapidfix does not ship, so the model reloads alone.
 
 Angles are stored in radians (names end in _rad) so a round trip is exact.
 Loading checks the format tag, the version and, when asked, the robot.
@@ -18,14 +22,13 @@ Loading checks the format tag, the version and, when asked, the robot.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import Any
 
 from rapidfix import __version__
 from rapidfix.atomic import write_text_atomic
-from rapidfix.errors.effect import effect_from_dict
+from rapidfix.errors.effects import effect_from_dict
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import ModelError
 
@@ -33,18 +36,9 @@ FORMAT = "rapidfix-model"
 VERSION = 1
 
 
-def file_sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a file's bytes (recorded for every measurement file a model used)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 16), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def model_to_dict(model: ErrorModel) -> dict[str, Any]:
     """The JSON document of a model."""
-    return {
+    doc = {
         "format": FORMAT,
         "version": VERSION,
         "robot": model.robot,
@@ -53,6 +47,9 @@ def model_to_dict(model: ErrorModel) -> dict[str, Any]:
         "data": list(model.data_files),
         "statistics": model.statistics,
     }
+    if model.robot_definition is not None:
+        doc["robot_definition"] = model.robot_definition
+    return doc
 
 
 def save_model(model: ErrorModel, path: str | Path) -> Path:
@@ -109,7 +106,11 @@ def model_from_dict(doc: Any, path: str | Path = "<model>") -> ErrorModel:
         except ModelError as err:
             raise ModelError(err.message, file=path, column=err.column or where,
                              hint=err.hint) from None
-    return ErrorModel(robot, effects, statistics, data_files)
+    definition = doc.get("robot_definition")
+    if definition is not None and not isinstance(definition, dict):
+        raise ModelError("key 'robot_definition' should be an object (a robot file's content)",
+                         file=path, column="robot_definition")
+    return ErrorModel(robot, effects, statistics, data_files, definition)
 
 
 def load_model(path: str | Path, robot_name: str | None = None) -> ErrorModel:

@@ -8,13 +8,21 @@ Knows nothing of RAPID or of error models.
 
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
 from rapidfix.kinematics.model import RobotModel
-from rapidfix.kinematics.robot_file import available_robots, load_robot, read_robot_file
+from rapidfix.kinematics.robot_file import (
+    available_robots,
+    is_shipped,
+    load_robot,
+    parse_robot,
+    read_robot_file,
+)
 
 __all__ = [
     "IKSolutions",
     "IKStatus",
     "RobotModel",
     "available_robots",
+    "is_shipped",
     "load_robot",
+    "parse_robot",
     "read_robot_file",
 ]

@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.batches import as_joint_batch
 from rapidfix.kinematics.ik_analytic import wrist_centre
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
-from rapidfix.kinematics.model import as_joint_batch
 from rapidfix.kinematics.screws import product_of_exponentials
 
 if TYPE_CHECKING:

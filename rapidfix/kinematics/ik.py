@@ -20,11 +20,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.batches import as_joint_batch, as_pose_batch
+from rapidfix.kinematics.frames import flange_target
 from rapidfix.kinematics.ik_analytic import analytic_solver
 from rapidfix.kinematics.ik_numeric import refine
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus, mask_dtype
-from rapidfix.kinematics.model import as_joint_batch, as_pose_batch
 from rapidfix.kinematics.screws import invert_transform
 
 if TYPE_CHECKING:
@@ -36,8 +38,6 @@ if TYPE_CHECKING:
 WRIST_TOL = 1e-7
 """|sin θ5| below which the wrist counts as singular (θ4 is then held)."""
 
-CHUNK = 4096
-"""Poses per numpy chunk: temporaries of a chunk stay in the L2/L3 cache."""
 LIMIT_TOL = 1e-7
 """rad by which an angle may pass a joint limit and still count as inside. Near a
 stretched elbow the closed form is good to about √eps (~1e-8 rad), so a pose taught at
@@ -238,7 +238,7 @@ def solve_all(
     wobj: WorkObject | np.ndarray | None = None,
     q_prev: np.ndarray | None = None,
     wrist_tol: float = WRIST_TOL,
-    chunk: int = CHUNK,
+    chunk: int = chunks.IK_SOLVE,
     backend: str | None = None,
 ) -> IKSolutions:
     """Every solution for poses T (N, 4, 4) (or (4, 4)), tool0 in the base frame.
@@ -252,8 +252,6 @@ def solve_all(
     """
     Tb, _ = as_pose_batch(T)
     if tool is not None or wobj is not None:
-        from rapidfix.kinematics.frames import flange_target
-
         Tb = flange_target(Tb, tool, wobj)
     n = Tb.shape[0]
     prev = _prev_batch(q_prev, n)

@@ -28,14 +28,13 @@ import math
 import numpy as np
 from numba import njit
 
+from rapidfix import chunks
 from rapidfix.kinematics.ik_analytic import AnalyticIK
 
 _TWO_PI = 2.0 * math.pi
 _REACH_TOL = 1e-9  # subproblem 3's tolerance in ik_analytic (mm)
 _SHOULDER_TOL2 = 1e-12  # ik_analytic._DISTANCE_TOL² (mm²)
 _FMA = {"contract"}  # only fused multiply-add: shorter dependency chains, no other licence
-CHUNK = 1024
-"""Poses per pass: the atan2 arguments of a chunk stay in the L2 cache."""
 
 
 def solve_nominal(
@@ -61,12 +60,12 @@ def solve_nominal(
     # +1 / −1 when axis 3 points along / against axis 2 exactly (all ABB arms), else 0.
     same23 = 1.0 if np.array_equal(w[1], w[2]) else -1.0 if np.array_equal(w[1], -w[2]) else 0.0
     k = _N_ARM_ANGLES + 12 * (1 if solver.flip_identity else 2)
-    size = min(CHUNK, T.shape[0])
+    size = min(chunks.IK_COMPILED, T.shape[0])
     y, x, angles = np.empty((size, k)), np.empty((size, k)), np.empty((size, k))
     rigid, shoulder = np.empty(size, dtype=np.bool_), np.empty(size, dtype=np.bool_)
     reach, sing = np.empty((size, 2), dtype=np.bool_), np.empty((size, 4), dtype=np.bool_)
-    for start in range(0, T.shape[0], CHUNK):
-        stop = min(start + CHUNK, T.shape[0])
+    for start in range(0, T.shape[0], chunks.IK_COMPILED):
+        stop = min(start + chunks.IK_COMPILED, T.shape[0])
         m = stop - start
         _geometry(
             T[start:stop], q_prev[start:stop], float(wrist_tol), w, r, c, solver.home_inv,

@@ -9,47 +9,18 @@ kinematics is analytic for the nominal model and seeded Newton for an actual one
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.batches import as_joint_batch, frozen
+from rapidfix.kinematics.confdata import confdata as confdata_of
+from rapidfix.kinematics.confdata import select_by_conf, select_nearest
+from rapidfix.kinematics.frames import Tool, WorkObject, tcp_pose
+from rapidfix.kinematics.ik import WRIST_TOL, solve_all
+from rapidfix.kinematics.ik_result import IKSolutions
 from rapidfix.kinematics.screws import current_axes, forward_pose, screw_rows
-
-if TYPE_CHECKING:
-    from rapidfix.kinematics.frames import Tool, WorkObject
-    from rapidfix.kinematics.ik_result import IKSolutions
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    out = np.array(a, dtype=float, copy=True)
-    out.setflags(write=False)
-    return out
-
-
-def as_joint_batch(q: np.ndarray) -> tuple[np.ndarray, bool]:
-    """(N, 6) float joints and whether the input was a single (6,) vector."""
-    arr = np.asarray(q, dtype=float)
-    single = arr.ndim == 1
-    arr = np.atleast_2d(arr)
-    if arr.ndim != 2 or arr.shape[1] != 6:
-        raise KinematicsError(f"joint values must have shape (N, 6) or (6,), got {arr.shape}")
-    return arr, single
-
-
-def as_pose_batch(T: np.ndarray) -> tuple[np.ndarray, bool]:
-    """(N, 4, 4) float poses and whether the input was a single (4, 4) pose."""
-    arr = np.asarray(T, dtype=float)
-    single = arr.ndim == 2
-    if single:
-        arr = arr[None]
-    if arr.ndim != 3 or arr.shape[1:] != (4, 4):
-        raise KinematicsError(f"poses must have shape (N, 4, 4) or (4, 4), got {arr.shape}")
-    return arr, single
-
-
-#: poses per chunk of `RobotModel.ik_conf` on large batches
-IK_CHUNK = 8192
 
 
 class RobotModel:
@@ -57,8 +28,9 @@ class RobotModel:
 
     Attributes: `name`, `axis_dirs (6, 3)`, `axis_points (6, 3)` mm, `screws (6, 6)`
     rows (w, v = -w × q), `home (4, 4)` tool0 at θ = 0, `limits (6, 2)` rad,
-    `source` (the robot file), `nominal` (the model the analytic IK is built on;
-    the model itself unless made by `with_screws`). Joint values are the
+    `source` (the robot file), `definition` (its content as plain data), `nominal`
+    (the model the analytic IK is built on; the model itself unless made by
+    `with_screws`). Joint values are the
     controller's: ABB's zero and sign conventions are built into the screws.
     """
 
@@ -72,6 +44,7 @@ class RobotModel:
         *,
         source: str | Path | None = None,
         nominal: RobotModel | None = None,
+        definition: dict | None = None,
     ) -> None:
         dirs = np.asarray(axis_dirs, dtype=float)
         if dirs.shape != (6, 3) or np.asarray(axis_points).shape != (6, 3):
@@ -82,13 +55,16 @@ class RobotModel:
         if np.any(norms < 1e-12):
             raise KinematicsError("an axis direction is zero")
         self.name = name
-        self.axis_dirs = _frozen(dirs / norms[:, None])
-        self.axis_points = _frozen(axis_points)
-        self.home = _frozen(home)
-        self.limits = _frozen(limits)
-        self.screws = _frozen(screw_rows(self.axis_dirs, self.axis_points))
+        self.axis_dirs = frozen(dirs / norms[:, None])
+        self.axis_points = frozen(axis_points)
+        self.home = frozen(home)
+        self.limits = frozen(limits)
+        self.screws = frozen(screw_rows(self.axis_dirs, self.axis_points))
         self.source = None if source is None else str(source)
         self.nominal = self if nominal is None else nominal
+        #: the robot file's content as plain data (name, joints, tool0), for a nominal
+        #: model read from one: what a model file stores to rebuild the robot
+        self.definition = definition
         self._analytic = None
 
     def __repr__(self) -> str:
@@ -117,8 +93,6 @@ class RobotModel:
         qb, single = as_joint_batch(q)
         T = forward_pose(self.axis_dirs, self.axis_points, self.home, qb)
         if tool is not None or wobj is not None:
-            from rapidfix.kinematics.frames import tcp_pose
-
             T = tcp_pose(T, tool, wobj)
         return T[0] if single else T
 
@@ -177,8 +151,6 @@ class RobotModel:
         With `tool` / `wobj` (frames.Tool / frames.WorkObject or (4, 4)), T is the TCP
         pose in the work object. `q_prev` (N, 6) or (6,) gives θ4 at wrist singularities.
         """
-        from rapidfix.kinematics.ik import WRIST_TOL, solve_all
-
         return solve_all(
             self,
             T,
@@ -195,17 +167,15 @@ class RobotModel:
 
         `ik_options` are passed to `ik` (tool, wobj, q_prev, wrist_tol).
         """
-        from rapidfix.kinematics.confdata import select_by_conf
-
         T = np.asarray(T, dtype=float)
-        if ik_options or T.ndim != 3 or T.shape[0] <= IK_CHUNK:
+        if ik_options or T.ndim != 3 or T.shape[0] <= chunks.IK_CONF:
             return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
         # in chunks: the (poses × 8 branches) temporaries then stay small and are reused
         conf = np.broadcast_to(np.asarray(conf, dtype=int), (T.shape[0], 4))
         q = np.empty((T.shape[0], 6))
         status = np.empty(T.shape[0], dtype=np.int8)
-        for start in range(0, T.shape[0], IK_CHUNK):
-            rows = slice(start, start + IK_CHUNK)
+        for start in range(0, T.shape[0], chunks.IK_CONF):
+            rows = slice(start, start + chunks.IK_CONF)
             q[rows], status[rows] = select_by_conf(self, self.ik(T[rows]), conf[rows])
         return q, status
 
@@ -213,13 +183,9 @@ class RobotModel:
         self, T: np.ndarray, q_prev: np.ndarray, **ik_options: object
     ) -> tuple[np.ndarray, np.ndarray]:
         """The valid solution nearest q_prev (N, 6) or (6,): (q (N, 6), status (N,))."""
-        from rapidfix.kinematics.confdata import select_nearest
-
         sols = self.ik(T, q_prev=q_prev, **ik_options)  # type: ignore[arg-type]
         return select_nearest(sols, q_prev)
 
     def confdata(self, q: np.ndarray) -> np.ndarray:
         """ABB confdata [cf1, cf4, cf6, cfx] (N, 4) int of joints q (N, 6) rad."""
-        from rapidfix.kinematics.confdata import confdata
-
-        return confdata(self, q)
+        return confdata_of(self, q)

@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics.frames import pose
+from rapidfix.kinematics.ik_analytic import check_structure
 from rapidfix.kinematics.model import RobotModel
 
 if sys.version_info >= (3, 11):
@@ -77,8 +79,12 @@ def parse_robot(data: dict, path: str) -> RobotModel:
     quat = _numbers(tool0, "quaternion", "tool0", path, 4)
     if abs(np.linalg.norm(quat) - 1.0) > 1e-6:
         raise _key_error(path, "tool0.quaternion", "not a unit quaternion (|q| must be 1 ± 1e-6)")
-    from rapidfix.kinematics.frames import pose
-
+    definition = {
+        "name": name,
+        "joint": [{key: [float(v) for v in joint[key]] for key in ("axis", "point", "limits_deg")}
+                  for joint in joints],
+        "tool0": {"position": position.tolist(), "quaternion": quat.tolist()},
+    }
     model = RobotModel(
         name.strip(),
         np.array(dirs),
@@ -86,9 +92,8 @@ def parse_robot(data: dict, path: str) -> RobotModel:
         pose(position, quat),
         np.array(limits),
         source=path,
+        definition=definition,
     )
-    from rapidfix.kinematics.ik_analytic import check_structure
-
     problem = check_structure(model)
     if problem is not None:
         raise _key_error(path, problem[0], problem[1])
@@ -134,6 +139,12 @@ def _shipped() -> dict[str, RobotModel]:
             model = _parse_bytes(entry.read_bytes(), f"{_ROBOTS_PACKAGE}/{entry.name}")
             models[model.name] = model
     return models
+
+
+def is_shipped(model: RobotModel) -> bool:
+    """True for a robot model shipped with rapidfix (read from the package, not a user's file)."""
+    shipped = _shipped().get(model.name)
+    return shipped is not None and shipped.source == model.source
 
 
 def available_robots() -> list[str]:

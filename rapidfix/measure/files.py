@@ -239,11 +239,11 @@ def write_setup(path: str | Path, setup: Setup) -> Path:
         lines.append(f"tracker_sigma_mm = {setup.tracker_sigma_mm:.6g}")
     lines.append(f"payload_kg = {float(setup.payload_kg):.6g}")
     for key, value in setup.extra.items():
-        lines.append(f"{key} = {_toml_value(value)}")
+        lines.append(f"{key} = {toml_value(value)}")
     return write_text_atomic(path, "\n".join(lines) + "\n")
 
 
-def _toml_value(value: Any) -> str:
+def toml_value(value: Any) -> str:
     if isinstance(value, str):
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(value, bool):
@@ -251,7 +251,7 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, (int, float, np.floating, np.integer)):
         return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
     if isinstance(value, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {type(value).__name__} to TOML")
 
 

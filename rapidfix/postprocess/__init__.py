@@ -9,14 +9,13 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `chain`        where each move starts (the motion executed just before it)
 - `path`         MoveL/MoveC kept within a tolerance when they become joint moves
 - `naming`       collision-free RAPID identifiers for new data
-- `literals`     jointtarget / robtarget literals for many targets at once
+- `emission_forms` what the rewrite writes (literals, declarations, MoveAbsJ), fast forms
 - `header`       the header comment, and recognising a compensated program
 - `check_units`  the new statements and declarations, as a program of their own
 - `verify`       re-parse them (in bulk where simple) and predict where the robot will go
 - `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
-- `demo_programs`, `ballbar_program`  the demo's step and the paper's ballbar program
 """
 
 from rapidfix.postprocess.compensator import Compensator

@@ -24,9 +24,10 @@ from pathlib import Path
 from typing import Any
 
 from rapidfix.atomic import exit_on_sigterm, write_bytes_atomic
+from rapidfix.digest import sha256_file
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.header import read_header, sha256_file
+from rapidfix.postprocess.header import read_header
 from rapidfix.postprocess.rewrite import RewriteOptions, header_options, rewrite_file
 
 RAPID_SUFFIXES = (".mod", ".modx", ".prg", ".sys")

@@ -11,12 +11,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rapidfix.digest import sha256_bytes, sha256_file
 from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import load_model
 from rapidfix.exceptions import KinematicsError, ModelError
-from rapidfix.kinematics import load_robot
+from rapidfix.kinematics import load_robot, parse_robot
 from rapidfix.kinematics.ik import prepare
-from rapidfix.postprocess.header import sha256_bytes, sha256_file
 
 
 @dataclass
@@ -48,7 +48,11 @@ class Compensator:
         model = load_model(model_path)
         if robot is not None and robot_file is not None:
             raise KinematicsError("give either --robot or --robot-file, not both")
-        robot_model = load_robot(robot_file if robot_file is not None else (robot or model.robot))
+        if robot is None and robot_file is None and model.robot_definition is not None:
+            robot_model = parse_robot(model.robot_definition, f"{model_path} (robot_definition)")
+        else:
+            robot_model = load_robot(robot_file if robot_file is not None
+                                     else (robot or model.robot))
         if robot_model.name != model.robot:
             raise ModelError(
                 f"the model was made for robot {model.robot!r}, not {robot_model.name!r}",

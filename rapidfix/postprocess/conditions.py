@@ -339,6 +339,12 @@ class ProgramConditions:
         n = len(targets.site)
         self.temperature_c = temperature_c
         self.needs = needs
+        # the payload of every target row and what is known of the grips (set by _payload)
+        self.payload_kg: np.ndarray | float = 0.0
+        self.payload_cog_mm: np.ndarray | None = None
+        self.grip_notes: list[str] = []
+        self.grip_unknown = 0
+        self.grip_statements = 0
         grips = grip_loads(program, outside) if "payload_kg" in needs else None
         motion_of_row = np.zeros(n, dtype=np.int64)
         for site in sites:
@@ -391,7 +397,7 @@ class ProgramConditions:
         tool_mass = np.asarray(targets.payload_kg, dtype=float)
         tool_cog = (np.zeros((n, 3)) if targets.payload_cog_mm is None
                     else np.asarray(targets.payload_cog_mm, dtype=float))
-        self.grip_notes: list[str] = []
+        self.grip_notes = []
         self.grip_unknown = 0
         self.grip_statements = 0 if grips is None else grips.statements
         if grips is None or grips.statements == 0 or n == 0:

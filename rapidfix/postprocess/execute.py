@@ -86,11 +86,6 @@ def commanded_motions(program: Program, robot: Any, decls: list[Program] | None 
     return Execution(np.array(motions, dtype=int), q, names, placement)
 
 
-def tcp_on(execution: Execution, flange: np.ndarray) -> np.ndarray:
-    """TCP positions (K,3) in each move's work object for actual flange poses (K,4,4)."""
-    return execution.placement.tcp(flange)[:, :3, 3]
-
-
 def align_axis1(robot: Any, actual: np.ndarray, intended: np.ndarray) -> np.ndarray:
     """`actual` positions (K,3) turned about axis 1 and moved along it by the angle and
     height that fit `intended` best.

@@ -10,23 +10,11 @@ files whose output is already up to date.
 
 from __future__ import annotations
 
-import hashlib
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
 MARK = "rapidfix-compensated"
 _LINE = re.compile(r"^[ \t]*!\s*" + MARK + r"\s+(\w+):[ \t]*(.*?)[ \t]*\r?$", re.MULTILINE)
-
-
-def sha256_bytes(data: bytes) -> str:
-    """Hex sha256 of bytes."""
-    return hashlib.sha256(data).hexdigest()
-
-
-def sha256_file(path: str | Path) -> str:
-    """Hex sha256 of a file's content."""
-    return sha256_bytes(Path(path).read_bytes())
 
 
 def _clean(value: str) -> str:

@@ -11,10 +11,12 @@ included) a numeric suffix makes it unique, shortening the stem to stay within
 from __future__ import annotations
 
 import re
+from collections import Counter
 from collections.abc import Iterable
 
 MAX_IDENTIFIER = 32
-_IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+#: an identifier-shaped word of RAPID text (keywords included)
+IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _BAD = re.compile(r"[^A-Za-z0-9_]+")
 _WORD = re.compile(r"[a-z0-9_]*")
 
@@ -22,8 +24,13 @@ _WORD = re.compile(r"[a-z0-9_]*")
 def identifiers_in(text: str) -> set[str]:
     """Every identifier-shaped word of a RAPID text, lower-cased (a superset is harmless)."""
     if text.isascii():  # lower-casing first is quicker and, for ASCII, the same
-        return set(_IDENT.findall(text.lower()))
-    return {word.lower() for word in _IDENT.findall(text)}
+        return set(IDENTIFIER.findall(text.lower()))
+    return {word.lower() for word in IDENTIFIER.findall(text)}
+
+
+def identifier_counts(text: str) -> Counter[str]:
+    """How often each identifier-shaped word occurs in a RAPID text, lower-cased."""
+    return Counter(map(str.lower, IDENTIFIER.findall(text)))
 
 
 class NameAllocator:

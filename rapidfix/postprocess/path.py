@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from rapidfix import chunks
+
 #: interior fractions of an interval where its deviation is sampled
 SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, 7)[1:-1]
 #: refine until the sampled deviation is below this share of the tolerance,
@@ -39,9 +41,6 @@ MAX_SPLIT = 64
 #: factor on the curvature bound of a joint-linear move for what the error model adds
 #: (joint-error slopes and bends, link and compliance errors: a few % in practice)
 BOUND_SAFETY = 2.0
-#: joint vectors per call of the error model's prediction: its temporaries (poses ×
-#: basis functions) then stay in the cache, several times faster on a CAM program
-PREDICT_CHUNK = 4096
 
 
 @dataclass(frozen=True)
@@ -222,8 +221,8 @@ def _sampled(curves: Curves, seg: np.ndarray, qc0: np.ndarray, qc1: np.ndarray,
     q = (qc0[:, None, :] + f[None, :, None] * (qc1 - qc0)[:, None, :]).reshape(-1, 6)
     seg_f = np.repeat(seg, nf)
     dist = np.empty(seg_f.shape[0])
-    for start in range(0, seg_f.shape[0], PREDICT_CHUNK):  # cache-sized batches
-        rows = slice(start, start + PREDICT_CHUNK)
+    for start in range(0, seg_f.shape[0], chunks.PREDICT):  # cache-sized batches
+        rows = slice(start, start + chunks.PREDICT)
         dist[rows] = curves.distance(seg_f[rows], predict(seg_f[rows], q[rows]))
     return dist.reshape(k, nf).max(axis=1)
 

@@ -30,16 +30,28 @@ import numpy as np
 
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
+from rapidfix.digest import sha256_bytes
 from rapidfix.errors.context import Context
-from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
+from rapidfix.exceptions import (
+    InvalidOption,
+    OutputExistsError,
+    RapidSemanticError,
+)
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.conditions import ProgramConditions
-from rapidfix.postprocess.header import MARK, Header, read_header, sha256_bytes
-from rapidfix.postprocess.literals import jointtarget_literals, robtarget_literals
-from rapidfix.postprocess.naming import NameAllocator
+from rapidfix.postprocess.emission_forms import (
+    joint_edits,
+    joint_statement,
+    jointtarget_declaration,
+    jointtarget_literals,
+    robtarget_literals,
+    statement_variant,
+)
+from rapidfix.postprocess.header import MARK, Header, read_header
+from rapidfix.postprocess.naming import NameAllocator, identifier_counts
 from rapidfix.postprocess.path import (
     MIN_PATH_TOLERANCE_MM,
     Curves,
@@ -51,7 +63,7 @@ from rapidfix.postprocess.path import (
 )
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, compensate_joints, plan_nearest, plan_targets
-from rapidfix.postprocess.resolve import Declarations, Site, operand_label, resolve
+from rapidfix.postprocess.resolve import Declarations, Site, Targets, operand_label, resolve
 from rapidfix.postprocess.verify import Expected, predicted_deviation, read_back
 from rapidfix.rapid import MotionInstruction, Program, parse_program
 from rapidfix.rapid.edit import Editor
@@ -90,16 +102,17 @@ class RewriteOptions:
     approach: bool = False
 
     def __post_init__(self) -> None:
+        """Refuse values the rewrite cannot honour (InvalidOption names the field)."""
         if self.emit not in EMIT_CHOICES:
-            raise RapidfixError(f"--emit must be one of {', '.join(EMIT_CHOICES)}")
+            raise InvalidOption("emit", f"must be one of {', '.join(EMIT_CHOICES)}")
         if not (math.isfinite(self.path_tolerance_mm) and self.path_tolerance_mm > 0):
-            raise RapidfixError("--path-tolerance must be a positive number of mm")
+            raise InvalidOption("path_tolerance_mm", "must be a positive number of mm")
         if self.path_tolerance_mm < MIN_PATH_TOLERANCE_MM:
-            raise RapidfixError(
-                f"--path-tolerance {self.path_tolerance_mm:g} mm is below what the model can "
-                f"resolve; give at least {MIN_PATH_TOLERANCE_MM:g} mm")
+            raise InvalidOption(
+                "path_tolerance_mm", f"{self.path_tolerance_mm:g} mm is below what the model "
+                f"can resolve; give at least {MIN_PATH_TOLERANCE_MM:g} mm")
         if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
-            raise RapidfixError(f"--temperature {self.temperature_c:g} °C is not a cell "
+            raise InvalidOption("temperature_c", f"{self.temperature_c:g} °C is not a cell "
                                 "temperature (give degrees Celsius, -50 to 150)")
 
 
@@ -207,45 +220,6 @@ def _indent_before(program: Program, offset: int) -> str | None:
     return before if before.strip() == "" else None
 
 
-def _statement_variant(program: Program, motion: MotionInstruction, edits: list[tuple]) -> str:
-    """The statement's text with local (start, end, text) edits (absolute offsets)."""
-    text = program.text
-    syntax = motion.syntax
-    out, pos = [], syntax.start
-    for a, b, new in sorted(edits):
-        out.append(text[pos:a])
-        out.append(new)
-        pos = b
-    out.append(text[pos:syntax.end])
-    return "".join(out)
-
-
-def _joint_edits(site: Site, name: str) -> list[tuple]:
-    """Edits turning a MoveL/MoveJ/MoveC statement into MoveAbsJ to `name`."""
-    syntax = site.motion.syntax
-    edits: list[tuple] = [(syntax.start, syntax.start + len(syntax.name), "MoveAbsJ")]
-    targets = site.targets
-    if len(targets) == 2:
-        edits.append((targets[0].argument.start, targets[1].argument.start, ""))
-    value = targets[-1].argument.value
-    edits.append((value.start, value.end, name))
-    return edits
-
-
-def _joint_statement(text: str, site: Site, name: str) -> str:
-    """`_statement_variant(_joint_edits(site, name))`, written out for the common case."""
-    syntax = site.motion.syntax
-    start = syntax.start
-    targets = site.targets
-    value = targets[-1].argument.value
-    if len(targets) == 2:
-        head = text[start + len(syntax.name):targets[0].argument.start]
-        head += text[targets[1].argument.start:value.start]
-    else:
-        head = text[start + len(syntax.name):value.start]
-    return f"MoveAbsJ{head}{name}{text[value.end:syntax.end]}"
-
-
 class _TakeUp:
     """The direction of each joint along a path whose joints reverse at its start.
 
@@ -304,6 +278,18 @@ class _Rewriter:
         self.checks: list[tuple[int, int, int]] = []
         # ... and intermediate points: (statement id, refined segment, its index there)
         self.inter_checks: list[tuple[int, int, int]] = []
+        # set by plan(): the resolved sites and target rows, the program's run conditions,
+        # the solved plan, each compensated site's emission mode ('joint' or 'filtered')
+        # and why a site is 'filtered' although jointtargets were asked for
+        self.sites: list[Site] = []
+        self.targets: Targets | None = None
+        self.conditions: ProgramConditions | None = None
+        self.plan_: Plan | None = None
+        self.mode: dict[int, str] = {}
+        self.filtered_reason: dict[int, str] = {}
+        # set by paths(): the frames and run conditions of the refined segments
+        self.seg_frames: Placement | None = None
+        self.seg_context: Context | None = None
 
     # ------------------------------------------------------------------ plan
     def plan(self) -> None:
@@ -327,8 +313,8 @@ class _Rewriter:
                 label = operand_label(site.targets, t.operand[row])
                 site.reason = label + self.plan_.reason[row]
         # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
-        self.mode: dict[int, str] = {}
-        self.filtered_reason: dict[int, str] = {}  # site -> why 'filtered' with jointtargets
+        self.mode = {}
+        self.filtered_reason = {}
         for i, site in enumerate(self.sites):
             if site.reason is None:
                 joint = self.options.emit == "jointtargets" and site.kind in "LJC"
@@ -552,7 +538,7 @@ class _Rewriter:
         """Apply local edits to a motion instruction as one whole-statement edit; returns
         the id of its new text among the check units."""
         motion = site.motion
-        text = _statement_variant(self.program, motion, edits)
+        text = statement_variant(self.program, motion, edits)
         if edits:
             self.editor.replace((motion.syntax.start, motion.syntax.end), text)
         return self.units.add_statement(motion.module, motion.routine, text)
@@ -598,9 +584,8 @@ class _Rewriter:
             name = jt_names.get(key)
             if name is None:
                 name = jt_names[key] = allocate(stem, "jt_")
-                # format_declaration("CONST", "jointtarget", name, literal), written out
                 add_declaration(site, len(site.targets) - 1,
-                                f"CONST jointtarget {name}:={literal};")
+                                jointtarget_declaration(name, literal))
             return name
 
         approach = {i: d for i, d in self.approach.items() if self.mode.get(i) == "joint"}
@@ -639,8 +624,8 @@ class _Rewriter:
                 for j in range(hi - lo):
                     sub = jointtarget_name(f"{stem}_{j + 1}", literals[inter_start + j], site)
                     self.inserted.add(sub)
-                    variant = _statement_variant(
-                        self.program, motion, _joint_edits(site, sub) + drops + zone_edit)
+                    variant = statement_variant(
+                        self.program, motion, joint_edits(site, sub) + drops + zone_edit)
                     lines.append(variant + sep)
                     ident = add_statement(motion.module, motion.routine, variant)
                     self.inter_checks.append((ident, segment_of[i], lo + j))
@@ -648,11 +633,11 @@ class _Rewriter:
             if i in approach:  # stands still there (fine), then arrives from one side
                 sub = jointtarget_name(f"{stem}_app", approach_literal[i], site)
                 self.inserted.add(sub)
-                lines.append(_statement_variant(self.program, motion,
-                                                _joint_edits(site, sub) + drops) + sep)
+                lines.append(statement_variant(self.program, motion,
+                                                joint_edits(site, sub) + drops) + sep)
             if lines:
                 self.editor.insert(motion.syntax.start, "".join(lines))
-            statement = _joint_statement(program_text, site, name)
+            statement = joint_statement(program_text, site, name)
             starts.append(motion.syntax.start)
             ends.append(motion.syntax.end)
             statements.append(statement)
@@ -677,11 +662,10 @@ class _Rewriter:
         add_declaration = self._add_declaration
         for n, name in zip(order, names):
             site = sites[n]
-            # format_declaration("CONST", "jointtarget", name, literal), written out
             add_declaration(site, len(site.targets) - 1,
-                            f"CONST jointtarget {name}:={literals[n]};")
+                            jointtarget_declaration(name, literals[n]))
         text = self.program.text
-        statements = [_joint_statement(text, site, name_of[key])
+        statements = [joint_statement(text, site, name_of[key])
                       for site, key in zip(sites, keys)]
         self.editor.replace_many([site.motion.syntax.start for site in sites],
                                  [site.motion.syntax.end for site in sites], statements)
@@ -707,7 +691,7 @@ class _Rewriter:
             op = t.operand[row]
             if op.form == "name" and op.declaration is not None:
                 by_decl.setdefault(id(op.declaration), []).append(row)
-        uses = _identifier_counts(self.program.text)
+        uses = identifier_counts(self.program.text)
         replaced: set[int] = set()
         for rows in by_decl.values():
             decl = t.operand[rows[0]].declaration
@@ -871,13 +855,6 @@ def _module_indent(program: Program) -> str:
         if indent:
             return indent
     return "  "
-
-
-def _identifier_counts(text: str) -> dict[str, int]:
-    import re
-    from collections import Counter
-
-    return Counter(map(str.lower, re.findall(r"[A-Za-z][A-Za-z0-9_]*", text)))
 
 
 def _strip_old_header(editor: Editor, text: str) -> None:

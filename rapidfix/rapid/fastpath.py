@@ -44,14 +44,14 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
-from rapidfix.rapid.transform import SyntaxBuilder, _number, numeric_aggregate_value
+from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
-_WS = r"[ \t\f\v\r\n\x1a]"
+WS = r"[ \t\f\v\r\n\x1a]"
 # What may stand between two statements of a run: whitespace and whole-line comments
 # (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
 # cut short on backtracking, so nothing inside it is ever read as a statement).
-_GAP = rf"{_WS}*(?:![^\n]*\n{_WS}*)*"
+GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
 # The letters of ISO 8859-1 beyond a-z that RAPID names may hold (as rapid.lark's NAME).
 # The fast names below are ASCII only; a name holding one of these letters ends
 # no fast name (_WORD_END), so its statement is left to the plain grammar.
@@ -64,9 +64,9 @@ _WORD_END = rf"(?![A-Za-z0-9_{_LATIN1_LETTERS}])"
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
 # A value without a call, for splitting a token whose syntax has been checked already:
 # an aggregate, a negated number, a name or a number.
-_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{_WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
+_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
 # A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
-_VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{_WS}*\([^()]*\)|{_SIMPLE_TEXT}"
+VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|{_SIMPLE_TEXT}"
 
 
 class NotFast(Exception):
@@ -124,18 +124,18 @@ def _patterns() -> dict[str, str]:
     # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
     # written once where it can be: the contextual lexer compiles these patterns into
     # each of its scanners, at a cost that grows with their length.
-    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name})"
-    optional = rf"\\{_WS}*{plain_name}(?:{_WS}*:={_WS}*{simple})?"
+    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
+    optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
     plain_argument = f"(?:{simple}|{optional})"
     # a further argument: after a comma, or an optional one right after the last
-    following = rf"(?:,{_WS}*|(?=\\))"
-    inner = (rf"\({_WS}*(?:{plain_argument}(?:{_WS}*{following}{plain_argument})*{_WS}*)?"
+    following = rf"(?:,{WS}*|(?=\\))"
+    inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
              rf"\)")
-    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{_WS}*)?{number}|{value_name}(?:{_WS}*{inner})?)"
+    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{inner})?)"
     argument = f"(?:{value}|{optional})"
-    call = f"{call_name}(?:{_WS}*{argument}(?:{_WS}*{following}{argument})*)?{_WS}*;"
-    decl = (f"(?i:(?:LOCAL{_WS}+)?(?:TASK{_WS}+)?(?:VAR|PERS|CONST)){_WS}+{type_name}{_WS}+"
-            f"{data_name}{_WS}*(?::={_WS}*{value}{_WS}*)?;")
+    call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
+            f"{data_name}{WS}*(?::={WS}*{value}{WS}*)?;")
     return {"call": call, "decl": decl}
 
 
@@ -157,8 +157,8 @@ def grammar_extension(grammar: str) -> str:
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
     # a run starts with a statement (the gap before the first matches nothing)
-    calls = f"(?=[A-Za-z])(?:{_GAP}{p['call']}){{1,{RUN_LIMIT}}}"
-    decls = f"(?=[A-Za-z])(?:{_GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
+    calls = f"(?=[A-Za-z])(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    decls = f"(?=[A-Za-z])(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
         raise ValueError("a terminal pattern holds '/'")
     return (
@@ -174,9 +174,9 @@ def grammar_extension(grammar: str) -> str:
 
 # Splitting a call whose syntax the lexer has checked: after its name (or its
 # first argument), one piece is an optional argument, a required value or the ';'.
-_CALL_PIECE = re.compile(
-    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_VALUE_TEXT}))?"
-    rf"|({_VALUE_TEXT})|(;))"
+CALL_PIECE = re.compile(
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({VALUE_TEXT}))?"
+    rf"|({VALUE_TEXT})|(;))"
 )
 
 
@@ -187,18 +187,35 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         return f"({pattern})" if modifiers else pattern
 
     return re.compile(
-        rf"{_GAP}(?:(?i:{group('LOCAL')}){_WS}+)?(?:(?i:{group('TASK')}){_WS}+)?"
-        rf"{group('(?i:VAR|PERS|CONST)')}{_WS}+"
-        rf"([A-Za-z][A-Za-z0-9_]*){_WS}+([A-Za-z][A-Za-z0-9_]*){_WS}*"
-        rf"(?::={_WS}*({_VALUE_TEXT}){_WS}*)?;"
+        rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
+        rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
+        rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
+        rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
 
 
 _DECL = declaration_pattern(True)
 
+class Memo(dict):
+    """The one cache policy of the fast path: pure results kept across tokens and files,
+    keyed by their text, emptied at once when `limit` entries are reached (a CAM program
+    repeats a few dozen texts, so a cleared cache refills at once)."""
+
+    __slots__ = ("limit",)
+
+    def __init__(self, limit: int) -> None:
+        super().__init__()
+        self.limit = limit
+
+    def keep(self, key: str, value: object) -> None:
+        """Store `value` under `key`, emptying the cache first when it is full."""
+        if len(self) >= self.limit:
+            self.clear()
+        self[key] = value
+
+
 # Groups of numbers recur in CAM programs ([0,0,0,0], [9E+09,...]); read each once.
-_GROUP_CACHE: dict[str, tuple[float, ...]] = {}
-_GROUP_CACHE_LIMIT = 65536
+_GROUP_CACHE: Memo = Memo(65536)
 
 
 def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
@@ -210,8 +227,8 @@ def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
         value = tuple(map(float, text.split(",")))
     except ValueError:
         raise NotFast(text) from None
-    if keep and len(_GROUP_CACHE) < _GROUP_CACHE_LIMIT:
-        _GROUP_CACHE[text] = value
+    if keep:
+        _GROUP_CACHE.keep(text, value)
     return value
 
 
@@ -241,7 +258,7 @@ def aggregate_value(text: str) -> tuple:
 # Splitting the inside of a checked function call: one piece is an optional
 # argument, a required value or the closing parenthesis.
 _INNER_PIECE = re.compile(
-    rf"{_WS}*(?:,{_WS}*)?(?:(\\){_WS}*([A-Za-z][A-Za-z0-9_]*)(?:{_WS}*:={_WS}*({_SIMPLE_TEXT}))?"
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
     rf"|({_SIMPLE_TEXT})|(\)))"
 )
 _WS_CHARS = " \t\f\v\r\n\x1a"
@@ -275,7 +292,7 @@ def _value_node(text: str, start: int) -> s.Expr:
     if first == "[":
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
-        return s.Number(start, end, _number(text), text)
+        return s.Number(start, end, number_value(text), text)
     if first == "-":
         rest = text[1:].lstrip(_WS_CHARS)
         operand = _value_node(rest, end - len(rest))
@@ -306,9 +323,9 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = re.compile(rf"{_GAP}([A-Za-z][A-Za-z0-9_]*)(?:{_WS}+({_VALUE_TEXT}))?")
+_CALL_HEAD = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
 # Distinct argument tails kept (a CAM program has a few dozen).
-_TAIL_LIMIT = 4096
+TAIL_LIMIT = 4096
 
 # One argument of a tail, offsets relative to the tail: (kind, start, end,
 # optional name, value node type or None, value start, value end, what the node
@@ -331,7 +348,7 @@ def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
 def _tail(text: str) -> tuple[_TailArgument, ...]:
     """The arguments in checked call text that follows a call's name or first argument."""
     entries: list[_TailArgument] = []
-    for piece in _CALL_PIECE.finditer(text):
+    for piece in CALL_PIECE.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
             node, at, end, fields = _value_entry(value, piece.start(4))
@@ -367,7 +384,7 @@ class CallTail:
 
 
 # Distinct call tails kept across tokens and files (a CAM program has a few dozen).
-_TAILS: dict[str, CallTail] = {}
+_TAILS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
@@ -403,15 +420,13 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         tail = tails.get(tail_text)
         if tail is None:
             tail = CallTail(tail_text)
-            if len(tails) >= _TAIL_LIMIT:
-                tails.clear()
-            tails[tail_text] = tail
+            tails.keep(tail_text, tail)
         calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
                                tail, base + tail_at))
     return calls
 
 
-def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
+def shared_aggregate_value(text: str, rests: Memo) -> tuple:
     """aggregate_value(text), reading what follows a leading group once per distinct text.
 
     A CAM program's robtargets differ in their first group (the position) and
@@ -424,9 +439,7 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
             items = rests.get(rest)
             if items is None:
                 items = aggregate_value("[[0]" + rest)[1:]  # the same items after any group
-                if len(rests) >= _TAIL_LIMIT:
-                    rests.clear()
-                rests[rest] = items
+                rests.keep(rest, items)
             # a CAM program's positions rarely recur: not worth keeping
             return (_number_group(text[2:cut], keep=False), *items)
     return aggregate_value(text)
@@ -434,7 +447,7 @@ def shared_aggregate_value(text: str, rests: dict[str, tuple]) -> tuple:
 
 # What follows the leading group of an aggregate, read once (see shared_aggregate_value);
 # kept across tokens and files like the call tails.
-_RESTS: dict[str, tuple] = {}
+_RESTS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
@@ -482,15 +495,16 @@ def cached_extension(grammar: str) -> str:
     0.06 s); a command that checks one small file would spend a fifth of its time on
     it. The key covers the grammar, this module's source and Lark's version.
     """
-    import hashlib
     import os
     import tempfile
     from pathlib import Path
 
     import lark
 
+    from rapidfix.digest import sha256_bytes
+
     source = Path(__file__).read_bytes()
-    key = hashlib.sha256(grammar.encode() + source + lark.__version__.encode()).hexdigest()
+    key = sha256_bytes(grammar.encode() + source + lark.__version__.encode())
     user = getattr(os, "getuid", lambda: "user")()
     path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
     try:

@@ -28,9 +28,13 @@ from rapidfix.rapid.program import (
     Program,
     RoutineInfo,
 )
+from rapidfix.rapid.scope import find_visible
 from rapidfix.rapid.source import SourceText
 from rapidfix.rapid.system_data import SYSTEM_DATA
 from rapidfix.rapid.values import ValueShapeError, fits_type, typed_value
+
+#: the scope of a name that has none (no routine, or nothing declared there)
+_NONE: dict[str, object] = {}
 
 # role of a required parameter -> the data type it takes
 _ROLE_TYPES = {
@@ -168,12 +172,10 @@ class ModelBuilder:
 
     # ------------------------------------------------------------ names
     def _find(self, key: str, module: str, routine: str | None) -> object | None:
-        if routine is not None:
-            found = self.routine_names.get((module, routine), {}).get(key)
-            if found is not None:
-                return found
-        found = self.module_names.get(module, {}).get(key)
-        return found if found is not None else self.global_names.get(key)
+        routine_scope = _NONE if routine is None else self.routine_names.get((module, routine),
+                                                                              _NONE)
+        return find_visible(key, routine_scope, self.module_names.get(module, _NONE),
+                            self.global_names)
 
     def _lookup(self, name: str, module: str, routine: str | None) -> TypedValue:
         found = self._find(name.lower(), module, routine)

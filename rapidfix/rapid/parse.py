@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import gc
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 from lark.exceptions import UnexpectedInput
 
+from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import parse_text
 from rapidfix.rapid.model_builder import build_program
@@ -18,30 +16,6 @@ from rapidfix.rapid.syntax_errors import explain
 
 # New container objects above which a build ends with one full collection.
 _MANY_OBJECTS = 100_000
-
-
-@contextmanager
-def _cyclic_gc_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector while a large tree is built.
-
-    Parsing allocates millions of small acyclic objects; every generation-2
-    collection would walk all of them again, which makes parsing of large CAM
-    programs far slower. Reference counting still frees everything as usual.
-
-    After a large build, one full collection moves the new objects straight to
-    the oldest generation. Left to itself the collector would walk them three
-    times within the caller's next few thousand allocations (as young, middle
-    and old objects); this walks them once.
-    """
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            gc.enable()
-            if gc.get_count()[0] > _MANY_OBJECTS:
-                gc.collect()
 
 
 def parse_source(source: SourceText) -> s.SourceFile:
@@ -60,7 +34,7 @@ def parse_program(source: str | bytes, filename: str = "<string>") -> Program:
     """
     decoded = decode_source(source, filename)
     original = source if isinstance(source, bytes) else decoded.encode()
-    with _cyclic_gc_paused():
+    with cyclic_gc_paused(collect_above=_MANY_OBJECTS):
         return build_program(decoded, original, parse_source(decoded))
 
 

@@ -13,6 +13,7 @@ from typing import Any, Protocol
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.instructions import MotionSpec
+from rapidfix.rapid.scope import find_visible
 from rapidfix.rapid.source import SourceText
 from rapidfix.rapid.span import Span
 from rapidfix.rapid.values import TARGET_TYPES, Value, ValueShapeError, typed_value
@@ -247,7 +248,7 @@ class Program:
     declarations: list[Declaration] = field(default_factory=list)
     routines: list[RoutineInfo] = field(default_factory=list)
     motions: list[MotionInstruction] = field(default_factory=list)
-    _by_name: dict[str, list[Declaration]] | None = field(default=None, repr=False)
+    _by_name: dict[str | None, dict[str, Declaration]] | None = field(default=None, repr=False)
     _indexed: int = field(default=0, repr=False)
 
     @property
@@ -283,17 +284,14 @@ class Program:
     def declaration(self, name: str, routine: str | None = None) -> Declaration | None:
         """The declaration `name` visible in `routine` (or at module level), any case."""
         if self._by_name is None or self._indexed != len(self.declarations):
-            index: dict[str, list[Declaration]] = {}
-            for decl in self.declarations:
-                index.setdefault(decl.key, []).append(decl)
-            self._by_name, self._indexed = index, len(self.declarations)
-        candidates = self._by_name.get(name.lower(), [])
-        if routine is not None:
-            routine_key = routine.lower()
-            for decl in candidates:
-                if decl.routine is not None and decl.routine.lower() == routine_key:
-                    return decl
-        return next((d for d in candidates if d.routine is None), None)
+            scopes: dict[str | None, dict[str, Declaration]] = {}
+            for decl in self.declarations:  # the first declaration of a name in a scope
+                routine_key = None if decl.routine is None else decl.routine.lower()
+                scopes.setdefault(routine_key, {}).setdefault(decl.key, decl)
+            self._by_name, self._indexed = scopes, len(self.declarations)
+        scopes = self._by_name
+        routine_scope = {} if routine is None else scopes.get(routine.lower(), {})
+        return find_visible(name.lower(), routine_scope, scopes.get(None, {}))
 
     def to_bytes(self) -> bytes:
         """The file exactly as it was read."""

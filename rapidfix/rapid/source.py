@@ -12,7 +12,6 @@ from __future__ import annotations
 import codecs
 from bisect import bisect_right
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from rapidfix.exceptions import RapidSyntaxError
 
@@ -124,12 +123,6 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
             )
         text, encoding = _decode_8bit(body)
     return SourceText(text, filename, encoding, bom, dominant_newline(text))
-
-
-def read_source(path: str | Path) -> SourceText:
-    """Read and decode a file; a missing or unreadable file raises OSError as usual."""
-    file = Path(path)
-    return decode_source(file.read_bytes(), str(path))
 
 
 def _first_binary_byte(body: bytes) -> int:

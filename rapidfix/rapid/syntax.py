@@ -430,28 +430,3 @@ def walk_statements(body: list[Statement], depth: int = 0) -> Iterator[tuple[Sta
                 break
         else:
             stack.pop()
-
-
-def walk_expression(expr: Expr | None) -> Iterator[Expr]:
-    """`expr` and every expression inside it (arguments of calls included)."""
-    stack: list[Expr | None] = [expr]
-    while stack:
-        node = stack.pop()
-        if node is None:
-            continue
-        yield node
-        if isinstance(node, (Binary,)):
-            stack.extend((node.right, node.left))
-        elif isinstance(node, (Unary,)):
-            stack.append(node.operand)
-        elif isinstance(node, Paren):
-            stack.append(node.inner)
-        elif isinstance(node, Aggregate):
-            stack.extend(reversed(node.items))
-        elif isinstance(node, Index):
-            stack.extend(reversed(node.indices))
-            stack.append(node.base)
-        elif isinstance(node, Component):
-            stack.append(node.base)
-        elif isinstance(node, Call):
-            stack.extend(arg.value for arg in reversed(node.args))

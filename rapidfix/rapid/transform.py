@@ -26,7 +26,7 @@ def _end(item: Any) -> int:
     return item.end_pos if isinstance(item, Token) else item.end
 
 
-def _number(text: str) -> float:
+def number_value(text: str) -> float:
     """RAPID num literal (decimal, exponent, 0x / 0b / 0o) as a float."""
     if len(text) > 1 and text[0] == "0" and text[1] in "xXbBoO":
         return float(int(text, 0))
@@ -72,7 +72,7 @@ class SyntaxBuilder(Transformer):
 
     # ------------------------------------------------------------ expressions
     def number(self, tok: Token) -> s.Number:
-        return s.Number(tok.start_pos, tok.end_pos, _number(tok), str(tok))
+        return s.Number(tok.start_pos, tok.end_pos, number_value(tok), str(tok))
 
     def string(self, tok: Token) -> s.String:
         return s.String(tok.start_pos, tok.end_pos, _string(tok))

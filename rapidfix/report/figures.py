@@ -32,14 +32,14 @@ class Figure:
     png: bytes
 
 
-def _png(fig: MplFigure) -> bytes:
+def png_bytes(fig: MplFigure) -> bytes:
     FigureCanvasAgg(fig)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
 
 
-def _list(a: np.ndarray) -> list[float | None]:
+def finite_list(a: np.ndarray) -> list[float | None]:
     """Floats for JSON; NaN (e.g. a repeat spread from one repeat) becomes None."""
     return [float(v) if np.isfinite(v) else None for v in np.asarray(a, dtype=float).ravel()]
 
@@ -76,7 +76,7 @@ def joint_error_figure(joints: Sequence[dict[str, np.ndarray] | None]) -> Figure
                     label="measured (mean ± repeat σ)")
         ax.plot(item["curve_theta"], item["curve_delta"], color=AFTER_COLOUR, lw=1.4,
                 label="RBF fit")
-        data[f"joint_{j + 1}"] = {key: _list(value) for key, value in item.items()
+        data[f"joint_{j + 1}"] = {key: finite_list(value) for key, value in item.items()
                                   if key != "gaps"}
         data[f"joint_{j + 1}"]["gaps"] = gaps.tolist()
         if not legend_done:
@@ -90,7 +90,7 @@ def joint_error_figure(joints: Sequence[dict[str, np.ndarray] | None]) -> Figure
         "deviation) and the fitted Gaussian RBF network over its valid range. Grey: "
         "stretches of the range without measurements, where the network only interpolates.",
         data,
-        _png(fig),
+        png_bytes(fig),
     )
 
 
@@ -125,12 +125,12 @@ def position_error_figure(before: np.ndarray, after: np.ndarray) -> Figure:
         "Distance between the reached and the intended target-ball position at every "
         "validation point, before and after compensation, and the RMS error per base axis.",
         {
-            "before_xyz_mm": [_list(r) for r in before],
-            "after_xyz_mm": [_list(r) for r in after],
-            "before_norm_mm": _list(nb),
-            "after_norm_mm": _list(na),
+            "before_xyz_mm": [finite_list(r) for r in before],
+            "after_xyz_mm": [finite_list(r) for r in after],
+            "before_norm_mm": finite_list(nb),
+            "after_norm_mm": finite_list(na),
         },
-        _png(fig),
+        png_bytes(fig),
     )
 
 
@@ -161,7 +161,7 @@ def ballbar_figure(
         "Ballbar test: length deviation before and after compensation",
         "Deviation of the ballbar length (pivot to target ball) from its nominal radius at "
         "each discrete point of the semicircle in the plane inclined 45°.",
-        {"angle_deg": _list(angle_deg), "before_mm": _list(before_mm),
-         "after_mm": _list(after_mm)},
-        _png(fig),
+        {"angle_deg": finite_list(angle_deg), "before_mm": finite_list(before_mm),
+         "after_mm": finite_list(after_mm)},
+        png_bytes(fig),
     )

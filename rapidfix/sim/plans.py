@@ -56,7 +56,7 @@ def plausible_poses(robot: RobotModel, q: np.ndarray, smr: np.ndarray) -> np.nda
     return (ball[:, 2] >= FLOOR_MM) & (fold >= FOLD_MM * size) & ~near_base
 
 
-def _longest_run(mask: np.ndarray) -> np.ndarray:
+def longest_run(mask: np.ndarray) -> np.ndarray:
     """The longest run of consecutive True values of `mask`, as a mask (a sweep has no gaps)."""
     edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
@@ -95,7 +95,7 @@ def sweep_plan(robot: RobotModel, smr_offset_mm: np.ndarray, *,
         grid = np.arange(np.ceil(lo / step_deg), np.floor(hi / step_deg) + 1) * step_deg
         q = np.tile(np.radians(fixed_deg), (len(grid), 1))
         q[:, j] = np.radians(grid)
-        q = q[_longest_run(plausible_poses(robot, q, smr))]
+        q = q[longest_run(plausible_poses(robot, q, smr))]
         rows_joint.append(np.full(len(q) * repeats, j))
         rows_q.append(np.tile(q, (repeats, 1)))
         rows_rep.append(np.repeat(np.arange(1, repeats + 1), len(q)))

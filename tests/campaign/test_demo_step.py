@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from rapidfix import pipeline
-from rapidfix.campaign.demo import demo_campaign, format_campaign
+from rapidfix.demo import demo_campaign, format_campaign
 from rapidfix.errors.model_file import save_model
 from rapidfix.sim import simulate_cell
 

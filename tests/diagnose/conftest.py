@@ -17,6 +17,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from rapidfix.demo import measured_range, pick_and_place, run_on_robot
+from rapidfix.demo.closed_loop import TOOLS
 from rapidfix.diagnose.run import diagnose
 from rapidfix.errors.context import Context
 from rapidfix.errors.fit import fit_error_model
@@ -25,12 +27,6 @@ from rapidfix.errors.model_file import save_model
 from rapidfix.kinematics.frames import pose
 from rapidfix.measure.registration import rigid_fit
 from rapidfix.measure.sweeps import analyse_sweeps
-from rapidfix.postprocess.closed_loop import (
-    TOOLS,
-    measured_range,
-    pick_and_place,
-    run_on_robot,
-)
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.execute import align_axis1, commanded_motions
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rapidfix.cli import main
-from rapidfix.diagnose.demo import demo_loop, format_demo
+from rapidfix.demo import demo_loop, format_demo
 from rapidfix.errors.model_file import load_model
 
 

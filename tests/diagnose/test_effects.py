@@ -15,7 +15,7 @@ from rapidfix.errors.candidates.registration import TrackerFrame, TrackerScale, 
 from rapidfix.errors.candidates.thermal import ThermalDrift
 from rapidfix.errors.candidates.tool_offset import ToolOffset
 from rapidfix.errors.context import Context
-from rapidfix.errors.effect import effect_from_dict
+from rapidfix.errors.effects import effect_from_dict
 from rapidfix.errors.model import ErrorModel
 from rapidfix.errors.model_file import load_model, save_model
 from rapidfix.kinematics import load_robot

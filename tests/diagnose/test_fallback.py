@@ -25,7 +25,7 @@ from rapidfix.errors.model_file import save_model
 from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.literals import robtarget_literals
+from rapidfix.postprocess.emission_forms import robtarget_literals
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.sim import EFFECTS, VirtualRobot
 from rapidfix.sim.plans import point_plan, sweep_plan

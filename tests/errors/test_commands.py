@@ -6,7 +6,8 @@ import numpy as np
 
 from rapidfix.cli import main
 from rapidfix.commands.demo import claim_output
-from rapidfix.errors.model_file import file_sha256, load_model
+from rapidfix.digest import sha256_file
+from rapidfix.errors.model_file import load_model
 from rapidfix.sim import VirtualRobot, simulate_cell
 
 
@@ -24,7 +25,7 @@ def test_fit_writes_a_model_of_the_sweeps_and_prints_the_summary(tmp_path, capsy
     assert "joint_errors" in (tmp_path / "r" / "report.json").read_text()
     model = load_model(out, "IRB1600-10/1.45")
     hashes = {d["name"]: d["sha256"] for d in model.data_files}
-    assert hashes["sweeps.csv"] == file_sha256(cell / "sweeps.csv")
+    assert hashes["sweeps.csv"] == sha256_file(cell / "sweeps.csv")
     assert [s["joint"] for s in model.statistics["joints"]] == [1, 2, 3, 4, 5, 6]
     # the fitted curve reproduces the truth of joint 3 (no gauge freedom there)
     robot = VirtualRobot.from_truth(json.loads((cell / "truth.json").read_text()))

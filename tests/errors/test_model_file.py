@@ -5,10 +5,11 @@ import json
 import numpy as np
 import pytest
 
-from rapidfix.errors.effect import effect_from_dict
+from rapidfix.digest import sha256_file
+from rapidfix.errors.effects import effect_from_dict
 from rapidfix.errors.joint_rbf import JointRBF, fit_network
 from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import file_sha256, load_model, save_model
+from rapidfix.errors.model_file import load_model, save_model
 from rapidfix.exceptions import ModelError
 
 X = np.radians(np.arange(-100.0, 100.1, 5.0))
@@ -101,4 +102,4 @@ def test_sha256_matches_hashlib_of_the_bytes(tmp_path):
 
     path = tmp_path / "a.csv"
     path.write_bytes(b"x,y\n1,2\n" * 10000)
-    assert file_sha256(path) == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert sha256_file(path) == hashlib.sha256(path.read_bytes()).hexdigest()

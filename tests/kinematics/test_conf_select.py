@@ -135,7 +135,7 @@ def test_compact_nearest_is_the_slot_by_slot_nearest(name, variant, seed):
 
 
 def test_large_batches_go_through_in_chunks_with_the_same_answers(monkeypatch):
-    from rapidfix.kinematics import model as model_module
+    from rapidfix import chunks
 
     robot = load_robot("IRB1600-10/1.45")
     rng = np.random.default_rng(3)
@@ -145,7 +145,7 @@ def test_large_batches_go_through_in_chunks_with_the_same_answers(monkeypatch):
     conf[::7, 3] = (conf[::7, 3] + 3) % 8  # some branches that do not match
     poses[5, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
     whole_q, whole_status = robot.ik_conf(poses, conf)
-    monkeypatch.setattr(model_module, "IK_CHUNK", 8)  # six full chunks and a short one
+    monkeypatch.setattr(chunks, "IK_CONF", 8)  # six full chunks and a short one
     q_c, status_c = robot.ik_conf(poses, conf)
     assert np.array_equal(np.nan_to_num(q_c, nan=9.0), np.nan_to_num(whole_q, nan=9.0))
     assert np.array_equal(status_c, whole_status)

@@ -103,13 +103,13 @@ def test_poe_matches_independent_link_chain(name):
 
 
 def test_batches_go_through_in_chunks_with_every_row_in_place(monkeypatch):
-    from rapidfix.kinematics import screws
+    from rapidfix import chunks
 
     name = "IRB2600-12/1.65"
     robot = load_robot(name)
     q = np.random.default_rng(12).uniform(robot.limits[:, 0], robot.limits[:, 1], (23, 6))
     whole = robot.fk(q), robot.joint_frames(q)[1]
-    monkeypatch.setattr(screws, "CHUNK", 5)  # four full chunks and a short one
+    monkeypatch.setattr(chunks, "FK", 5)  # four full chunks and a short one
     T, points = robot.fk(q), robot.joint_frames(q)[1]
     assert np.abs(T[:, :3, 3] - link_chain_fk(name, q)[:, :3, 3]).max() < 1e-9
     assert np.abs(points[:, 4] - opw_wrist_centre(name, q)).max() < 1e-9

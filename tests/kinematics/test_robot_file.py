@@ -6,9 +6,9 @@ from importlib import resources
 import numpy as np
 import pytest
 
+from rapidfix.commands.robot_options import add_robot_arguments, robot_from_args
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics import available_robots, load_robot, read_robot_file
-from rapidfix.kinematics.cli_args import add_robot_arguments, robot_from_args
 
 IRB1600 = resources.files("rapidfix.kinematics.robots").joinpath("irb1600-10_1.45.toml").read_text()
 

@@ -25,13 +25,13 @@ from rapidfix.errors.candidates.joint_reference import JointReference
 from rapidfix.errors.candidates.registration import TrackerFrame, TrackerScale
 from rapidfix.errors.candidates.thermal import ThermalDrift
 from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.effect import registered_effects
+from rapidfix.errors.effects import registered_effects
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.literals import robtarget_literals
+from rapidfix.postprocess.emission_forms import robtarget_literals
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.sim.plans import point_plan
 

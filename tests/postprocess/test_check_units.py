@@ -20,7 +20,7 @@ from rapidfix.postprocess import verify as verify_module
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file, rewrite_source
 from rapidfix.postprocess.verify import parse_units, read_back_full
 from rapidfix.rapid import parse_program
-from rapidfix.rapid.bulk import read_bulk
+from rapidfix.rapid.readback import read_bulk
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from cam_program import cam_program
@@ -175,11 +175,11 @@ def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypat
 
 
 def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_route():
-    from rapidfix.postprocess.verify import _joint_values, _NotBulk
+    from rapidfix.rapid.readback import NotBulk, joint_values
 
     good = ["[[1,-2.5,3E+02,.5,1.,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
             "[[-0.000001,10,20,30,40,50],[0,0,0,0,0,1.25]]"] * 300
-    got = _joint_values(good)
+    got = joint_values(good)
     want = [[float(v) for v in t[2:t.index("]")].split(",")] for t in good]
     assert np.array_equal(got, np.array(want))
     for bad in ["[[1.2.3,0,0,0,0,0],[0,0,0,0,0,0]]", "[[1e,0,0,0,0,0],[0,0,0,0,0,0]]",
@@ -187,5 +187,5 @@ def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_rout
                 "[[0,0,0,0,0,0,0],[0,0,0,0,0,0]]", "[[0,0,0,0,0,0],[0,0,0,0,0]]",
                 "[[0,0,0,0,0,0],[0,0,0,0,0,0],[0]]", "[[0,0,0,0,0,0]]", "[[1e999,0,0,0,0,0],"
                 "[0,0,0,0,0,0]]"]:
-        with pytest.raises(_NotBulk):
-            _joint_values([*good[:5], bad, *good[:300]])
+        with pytest.raises(NotBulk):
+            joint_values([*good[:5], bad, *good[:300]])

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from rapidfix.postprocess.ballbar_program import ballbar_program
-from rapidfix.postprocess.demo_programs import format_table, rewrite_and_run
+from rapidfix.demo import format_table, rewrite_and_run
+from rapidfix.demo.ballbar_program import ballbar_program
 
 
 def test_sample_ballbar_is_the_generated_program(samples):

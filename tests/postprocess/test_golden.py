@@ -208,7 +208,7 @@ def test_random_programs_change_only_where_they_must(comp, cell, data):
     """Random sequences of the ballbar targets as MoveJ/MoveL with random zones, speeds
     and optional arguments: undoing the changes gives the input, and every jointtarget
     puts the TCP on its robtarget through the fitted model."""
-    from rapidfix.postprocess.ballbar_program import ballbar_program
+    from rapidfix.demo.ballbar_program import ballbar_program
     from rapidfix.postprocess.rewrite import rewrite_source
     from rapidfix.rapid import parse_program
 

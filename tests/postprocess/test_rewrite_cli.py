@@ -106,3 +106,21 @@ def test_bad_options_are_user_errors(cell, program, tmp_path, capsys):
     )
     assert "made for robot" in capsys.readouterr().err
     assert main(["rewrite", str(program), "--model", model]) == 2  # no -o: wrong usage
+
+
+def test_options_are_refused_in_the_library_words_and_in_the_command_words(
+        cell, program, tmp_path, capsys):
+    """The library names the field it refuses, the command line the flag."""
+    from rapidfix.exceptions import InvalidOption
+    from rapidfix.postprocess.rewrite import RewriteOptions
+
+    with pytest.raises(InvalidOption) as err:
+        RewriteOptions(temperature_c=400.0)
+    assert err.value.option == "temperature_c"
+    assert str(err.value).startswith("temperature_c 400 °C is not a cell temperature")
+    out = str(tmp_path / "o.mod")
+    status = main(["rewrite", str(program), "--model", str(cell["model_path"]), "-o", out,
+                   "--temperature", "400"])
+    message = capsys.readouterr().err
+    assert status == 1 and "--temperature 400 °C is not a cell temperature" in message
+    assert "temperature_c" not in message

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rapidfix.postprocess.ballbar_program import ballbar_program
+from rapidfix.demo.ballbar_program import ballbar_program
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.rapid import parse_program
 

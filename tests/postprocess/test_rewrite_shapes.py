@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from program_shapes import SHAPES, shape_moves
 
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
-from rapidfix.rapid import bulk, parse
+from rapidfix.rapid import parse, readback
 from rapidfix.rapid.fastpath import NotFast
 from rapidfix.rapid.grammar import rapid_parser
 
@@ -38,7 +38,7 @@ def test_every_shape_rewrites_as_through_the_plain_grammar(name, comp, monkeypat
     fast = rewrite_source(data, filename, comp, RewriteOptions())
     with monkeypatch.context() as patch:
         patch.setattr(parse, "parse_text", _plain_parse_text)
-        patch.setattr(bulk, "run_parser", _Refuse)
+        patch.setattr(readback, "run_parser", _Refuse)
         plain = rewrite_source(data, filename, comp, RewriteOptions())
     assert fast.moves_compensated == plain.moves_compensated > 0
     assert not fast.skipped

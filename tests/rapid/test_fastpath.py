@@ -16,6 +16,8 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
 from rapidfix.rapid.fastpath import (
+    TAIL_LIMIT,
+    Memo,
     NotFast,
     aggregate_value,
     fast_parser,
@@ -209,7 +211,7 @@ def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
 
 
 def test_function_calls_and_negated_numbers_are_read_in_runs():
-    from rapidfix.rapid.bulk import Run, run_parser
+    from rapidfix.rapid.readback import Run, run_parser
 
     tree = run_parser().parse(FAST["function calls and negated numbers"])
     body = tree.modules[0].items[0].body
@@ -217,7 +219,7 @@ def test_function_calls_and_negated_numbers_are_read_in_runs():
 
 
 def test_comments_between_statements_stay_in_one_run():
-    from rapidfix.rapid.bulk import Run, read_bulk, run_parser
+    from rapidfix.rapid.readback import Run, read_bulk, run_parser
 
     text = FAST["comments between statements"]
     module = run_parser().parse(text).modules[0]
@@ -291,7 +293,7 @@ def read(fn, *args):
 @settings(max_examples=300, deadline=None)
 @given(st.lists(loose_aggregate(), min_size=1, max_size=4))
 def test_sharing_what_follows_a_leading_group_reads_the_same_values(texts):
-    rests: dict[str, tuple] = {}
+    rests = Memo(TAIL_LIMIT)
     for text in texts + ["[[1" + t[t.find("]"):] for t in texts if "]" in t[:-1]]:
         assert read(shared_aggregate_value, text, rests) == read(aggregate_value, text)
 

@@ -1,27 +1,32 @@
-"""Shared command-line options for choosing a robot model: --robot and --robot-file."""
+"""The one definition of the command-line options that choose a robot: --robot and --robot-file."""
 
 from __future__ import annotations
 
 import argparse
 
-from rapidfix.kinematics.model import RobotModel
-from rapidfix.kinematics.robot_file import available_robots, load_robot, read_robot_file
+from rapidfix.kinematics import RobotModel, available_robots, load_robot, read_robot_file
 
 DEFAULT_ROBOT = "IRB1600-10/1.45"
 
 
 def add_robot_arguments(
-    parser: argparse.ArgumentParser, default: str | None = DEFAULT_ROBOT
+    parser: argparse.ArgumentParser, default: str | None = DEFAULT_ROBOT,
+    default_text: str | None = None,
 ) -> None:
-    """Add mutually exclusive --robot NAME and --robot-file PATH options to `parser`."""
+    """Add mutually exclusive --robot NAME and --robot-file PATH options to `parser`.
+
+    `default_text` says what is used without either (default: the `default` robot).
+    """
+    if default_text is None and default:
+        default_text = default
     group = parser.add_mutually_exclusive_group()
     group.add_argument(
         "--robot",
         metavar="NAME",
         default=None,
         help=f"robot model shipped with rapidfix ({', '.join(available_robots())}); "
-        f"default {default}"
-        if default
+        f"default {default_text}"
+        if default_text
         else "robot model shipped with rapidfix",
     )
     group.add_argument(

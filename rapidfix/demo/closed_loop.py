@@ -26,8 +26,8 @@ import numpy as np
 from rapidfix.atomic import write_text_atomic
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.kinematics.frames import pose
+from rapidfix.postprocess.emission_forms import robtarget_literals
 from rapidfix.postprocess.execute import align_axis1, commanded_motions
-from rapidfix.postprocess.literals import robtarget_literals
 from rapidfix.rapid import parse_program
 from rapidfix.sim.plans import point_plan
 from rapidfix.sim.virtual_robot import RunConditions

@@ -18,9 +18,9 @@ from rapidfix.campaign.iso9283 import cube_runs, evaluate, to_robot
 from rapidfix.campaign.plan import PlanSettings, make_plan, write_plan
 from rapidfix.campaign.poses import ball_positions
 from rapidfix.campaign.program import ProgramOptions
+from rapidfix.demo.campaign_run import simulate_program
 from rapidfix.kinematics import load_robot
 from rapidfix.measure.files import read_points
-from rapidfix.sim.campaign_run import simulate_program
 from rapidfix.sim.virtual_robot import DEFAULT_ROBOT, DEFAULT_SMR_OFFSET_MM
 
 CYCLES = 10

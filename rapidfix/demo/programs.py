@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from rapidfix.atomic import write_text_atomic
+from rapidfix.demo.ballbar_program import ballbar_program
 from rapidfix.exceptions import RapidfixError
-from rapidfix.postprocess.ballbar_program import ballbar_program
 from rapidfix.postprocess.batch import RAPID_SUFFIXES
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.execute import Execution, align_axis1, commanded_motions

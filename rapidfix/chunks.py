@@ -1,0 +1,23 @@
+"""Batch sizes of the vectorised hot paths, in one place.
+
+Kinematics, the error model and the path check work on arrays of poses; on a CAM
+program of a million moves one big array would leave the CPU cache, so each hot
+path goes through its batch in chunks of these many rows. Each size was chosen by
+timing its own loop (see docs/performance.md); results never depend on them.
+"""
+
+from __future__ import annotations
+
+#: forward products (screws.py): their (chunk, 4, 4) temporaries stay in the L2 cache
+FK = 2048
+#: `RobotModel.ik_conf` on large batches: IK on the confdata branch, one chunk at a time
+IK_CONF = 8192
+#: closed-form IK with numpy (ik.solve_all): temporaries of a chunk stay in L2/L3
+IK_SOLVE = 4096
+#: compiled closed-form IK (ik_compiled): the atan2 arguments of a chunk stay in L2
+IK_COMPILED = 1024
+#: the per-joint compensation solve (compensate.py)
+COMPENSATE = 4096
+#: joint vectors per call of the error model's prediction on a path (postprocess/path.py):
+#: its temporaries (poses × basis functions) stay in the cache
+PREDICT = 4096

@@ -1,0 +1,48 @@
+"""IK on the confdata branch and loading the compensator (postprocess/plan.py, compensator.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell):
+    from rapidfix.kinematics import IKStatus
+    from rapidfix.kinematics.confdata import conf_matches
+    from rapidfix.postprocess.plan import ik_on_conf
+
+    robot = cell["robot"]
+    rng = np.random.default_rng(8)
+    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (400, 6))
+    q[::10, 4] = 0.0  # wrist singular
+    q[5::10, 0] = np.radians(90.0)  # on a quadrant boundary
+    poses = robot.fk(q)
+    conf = robot.confdata(q)
+    conf[::3] = np.column_stack(
+        [rng.integers(-2, 2, (len(conf[::3]), 3)), rng.integers(0, 8, len(conf[::3]))]
+    )
+    poses[7, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
+    # reference: the first slot, over every branch and ±360° variant, whose joints are
+    # valid and have the confdata
+    sols = robot.ik(poses)
+    match = sols.valid & conf_matches(robot, sols.q, conf[:, None, :])
+    found = match.any(axis=1)
+    slot = np.argmax(match, axis=1)
+    want_q = np.where(found[:, None], sols.q[np.arange(len(conf)), slot], np.nan)
+    want_status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF)
+    want_status[found & sols.singular[np.arange(len(conf)), slot]] = IKStatus.WRIST_SINGULAR
+    none = ~sols.valid.any(axis=1)
+    want_status[none] = sols.status[none]
+    got_q, got_status = ik_on_conf(robot, poses, conf)
+    assert np.array_equal(want_status, np.asarray(got_status))
+    assert np.array_equal(np.nan_to_num(want_q, nan=7.0), np.nan_to_num(got_q, nan=7.0))
+    assert {0, 1, 4}.issubset(set(np.asarray(got_status).tolist()))
+
+
+def test_loading_a_compensator_prepares_its_robot(cell, monkeypatch):
+    """The compiled IK kernel's one-time load happens with the model, not in a rewrite."""
+    from rapidfix.postprocess import compensator
+
+    prepared = []
+    monkeypatch.setattr(compensator, "prepare", prepared.append)
+    comp = compensator.Compensator.load(cell["model_path"])
+    assert prepared == [comp.robot]

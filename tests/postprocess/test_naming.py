@@ -1,0 +1,72 @@
+"""Collision-free RAPID identifiers (postprocess/naming.py)."""
+
+from __future__ import annotations
+
+import re
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rapidfix.postprocess.naming import MAX_IDENTIFIER, NameAllocator, identifiers_in
+
+IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    taken=st.lists(st.from_regex(r"[A-Za-z][A-Za-z0-9_]{0,40}", fullmatch=True), max_size=30),
+    stems=st.lists(st.text(min_size=0, max_size=45), min_size=1, max_size=30),
+)
+def test_allocated_names_are_valid_and_unique(taken, stems):
+    names = NameAllocator(taken)
+    used = {t.lower() for t in taken}
+    for stem in stems:
+        name = names.allocate(stem)
+        assert IDENT.match(name) and len(name) <= MAX_IDENTIFIER
+        assert name.lower() not in used
+        used.add(name.lower())
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    words=st.lists(st.from_regex(r"[A-Za-z0-9_]{0,12}", fullmatch=True), max_size=20),
+    separators=st.lists(st.sampled_from([" ", "\n", ",", ":=", "(", "9", "_", "!", "é"]),
+                        min_size=20, max_size=20),
+    stems=st.lists(st.sampled_from(["p1", "P1", "x", "p1_2", "a9", "Ⅷ", ""]), min_size=1,
+                   max_size=12),
+    prefix=st.sampled_from(["jt_", "ft_", "JT_", "_", ""]),
+)
+def test_names_avoid_every_identifier_of_the_texts_it_is_given(words, separators, stems, prefix):
+    text = "".join(w + s for w, s in zip(words, separators))
+    names = NameAllocator(texts=[text])
+    used = identifiers_in(text)  # every identifier, the independent way
+    for stem in stems:
+        name = names.allocate(stem, prefix)
+        assert IDENT.match(name) and name.lower() not in used
+        used.add(name.lower())
+    assert not names.is_free(next(iter(used)))
+
+
+def test_names_follow_the_robtarget_and_avoid_collisions():
+    names = NameAllocator(["JT_P10", "jt_p20"])
+    assert names.allocate("p30") == "jt_p30"
+    assert names.allocate("p10") == "jt_p10_2"  # case-insensitive collision
+    assert names.allocate("p20") == "jt_p20_2"
+    assert names.allocate("p20") == "jt_p20_3"
+    long = names.allocate("x" * 40)
+    assert len(long) == MAX_IDENTIFIER and long.startswith("jt_x")
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    taken=st.lists(st.sampled_from(["jt_p1", "JT_P2", "jt_p1_2", "x", "jt_"]), max_size=4),
+    stems=st.lists(st.sampled_from(["p1", "P1", "p2", "p3", "_p4", "a" * 31, "b c", "9"]),
+                   max_size=8),
+    prefix=st.sampled_from(["jt_", "ft_", "_"]),
+)
+def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, stems, prefix):
+    text = " ".join(taken)
+    one = NameAllocator(texts=[text])
+    many = NameAllocator(texts=[text])
+    assert many.allocate_many(stems, prefix) == [one.allocate(s, prefix) for s in stems]
+    assert many.allocate("p1", prefix) == one.allocate("p1", prefix)

@@ -1,0 +1,89 @@
+"""The layers of ARCHITECTURE.md hold: import-linter checks the contracts in pyproject.toml
+(every import between rapidfix's packages, those inside functions included)."""
+
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _lint_imports() -> list[str]:
+    script = Path(sys.executable).with_name("lint-imports")
+    found = str(script) if script.exists() else shutil.which("lint-imports")
+    assert found, "lint-imports not installed: pip install '.[test]'"
+    return [found]
+
+
+def test_import_contracts_are_kept():
+    done = subprocess.run(
+        [*_lint_imports(), "--config", str(ROOT / "pyproject.toml"), "--no-cache"],
+        cwd=ROOT, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "0 broken" in done.stdout
+
+
+def test_a_broken_layer_is_reported(tmp_path):
+    """The check can fail: a contract the code does not keep (the error model below the
+    kinematics) is reported as broken, with the import that breaks it."""
+    config = tmp_path / "contracts.toml"
+    config.write_text(
+        '[tool.importlinter]\nroot_package = "rapidfix"\n\n'
+        '[[tool.importlinter.contracts]]\nname = "inverted"\ntype = "layers"\n'
+        'layers = ["rapidfix.kinematics", "rapidfix.errors"]\n', encoding="utf-8")
+    done = subprocess.run([*_lint_imports(), "--config", str(config), "--no-cache"],
+                          cwd=ROOT, capture_output=True, text=True, check=False)
+    assert done.returncode != 0
+    assert "rapidfix.errors" in done.stdout and "BROKEN" in done.stdout
+
+
+def _self_attributes(function: ast.FunctionDef) -> set[str]:
+    found = set()
+    for node in ast.walk(function):
+        targets = (node.targets if isinstance(node, ast.Assign) else
+                   [node.target] if isinstance(node, (ast.AnnAssign, ast.AugAssign)) else [])
+        for target in targets:
+            for part in ast.walk(target):
+                if (isinstance(part, ast.Attribute) and isinstance(part.value, ast.Name)
+                        and part.value.id == "self"):
+                    found.add(part.attr)
+    return found
+
+
+@pytest.mark.parametrize("package", ["rapid", "kinematics", "postprocess", "demo", "link"])
+def test_objects_declare_their_state_in_init(package):
+    """A reader finds all of an object's state in its __init__ (or its dataclass fields):
+    no method sets an attribute that __init__ does not."""
+    late = []
+    for path in sorted((ROOT / "rapidfix" / package).rglob("*.py")):
+        for cls in (n for n in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+                    if isinstance(n, ast.ClassDef)):
+            methods = [f for f in cls.body if isinstance(f, ast.FunctionDef)]
+            declared = {t.target.id for t in cls.body
+                        if isinstance(t, ast.AnnAssign) and isinstance(t.target, ast.Name)}
+            for method in methods:
+                if method.name in ("__init__", "__post_init__"):
+                    declared |= _self_attributes(method)
+            late += [f"{path.name}: {cls.name}.{method.name} sets {sorted(extra)}"
+                     for method in methods if method.name not in ("__init__", "__post_init__")
+                     for extra in [_self_attributes(method) - declared] if extra]
+    assert not late, "\n".join(late)
+
+
+def test_no_module_imports_a_private_name_of_another():
+    """`from rapidfix.x import _name` across modules couples a reader to internals; what
+    other modules use is public (no leading underscore)."""
+    found = []
+    for path in sorted((ROOT / "rapidfix").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("rapidfix"):
+                found += [f"{path.relative_to(ROOT)}: {node.module}.{alias.name}"
+                          for alias in node.names
+                          if alias.name.startswith("_") and not alias.name.startswith("__")]
+    assert not found, "\n".join(found)
