@@ -31,7 +31,7 @@ import numpy as np
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.errors.context import Context
-from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError
+from rapidfix.exceptions import OutputExistsError, RapidfixError, RapidSemanticError, UsageError
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.check_units import CheckUnits
@@ -101,6 +101,12 @@ class RewriteOptions:
         if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
             raise RapidfixError(f"--temperature {self.temperature_c:g} °C is not a cell "
                                 "temperature (give degrees Celsius, -50 to 150)")
+        if self.approach and self.emit != "jointtargets":
+            # an approach point fixes the side each joint arrives from; a robtarget leaves
+            # the joints to the controller's inverse kinematics, so it cannot
+            raise UsageError(f"--approach needs --emit jointtargets (not {self.emit}): "
+                             "approach points are joint positions, and a robtarget leaves "
+                             "the joints to the controller")
 
 
 

@@ -83,8 +83,15 @@ def test_simulate_cell_writes_a_readable_set_and_the_truth(tmp_path):
     # the data are the truth's robot, measured: rebuild it and compare
     vr = VirtualRobot.from_truth(truth)
     exact = vr.measure(cal.q, {"payload_kg": cal.payload_kg, "time_s": cal.time_s},
-                       noise=False, frame="tracker")
+                       noise=False, frame="tracker", ball=cal.ball)
     assert np.abs(exact - cal.xyz).max() < 0.15
+    # the points turn through the two nests the setup declares; the sweeps use nest 0
+    assert cal.ball.tolist() == [0, 1] * 6 and setup.ball_offsets_mm.shape == (2, 3)
+    np.testing.assert_allclose(setup.ball_offsets_mm, vr.smr_offsets_mm)
+    on_first = vr.measure(cal.q, {"payload_kg": cal.payload_kg, "time_s": cal.time_s},
+                          noise=False, frame="tracker")
+    apart = np.linalg.norm(on_first - cal.xyz, axis=1)
+    assert np.all(apart[cal.ball == 0] < 0.15) and np.all(apart[cal.ball == 1] > 100.0)
     with pytest.raises(OutputExistsError):
         simulate_cell(out, seed=5)
 
