@@ -30,14 +30,15 @@ from rapidfix.sim import VirtualRobot, simulate_set
 from rapidfix.sim.virtual_robot import RunConditions
 
 
-def scenario(effects: tuple[str, ...], seed: int, n_calibration: int = 60):
-    """(simulated set, per-joint model, diagnosis) for hidden `effects` and `seed`."""
-    return _scenario(tuple(effects), int(seed), int(n_calibration))
+def scenario(effects: tuple[str, ...], seed: int, n_calibration: int = 60, balls: int = 2):
+    """(simulated set, per-joint model, diagnosis) for hidden `effects` and `seed`; the
+    points measured on `balls` nests of the flange (the simulator's default: 2)."""
+    return _scenario(tuple(effects), int(seed), int(n_calibration), int(balls))
 
 
 @cache
-def _scenario(effects: tuple[str, ...], seed: int, n_calibration: int):
-    data = simulate_set(seed=seed, effects=effects, n_calibration=n_calibration)
+def _scenario(effects: tuple[str, ...], seed: int, n_calibration: int, balls: int):
+    data = simulate_set(seed=seed, effects=effects, n_calibration=n_calibration, balls=balls)
     robot = data.robot.robot
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)
