@@ -51,7 +51,7 @@ def exposing_feature(effect: Effect, data: MeasuredPoints) -> Feature:
     if kind == "joint_coupling":
         src = int(getattr(effect, "source", 0))
         return Feature(np.degrees(q[:, src]), f"joint {src + 1} angle (°)")
-    if kind == "joint_driver":
+    if kind in ("joint_driver", "frame_driver"):
         return _driver_feature(effect, data)
     if kind == "tool_offset":
         return Feature(np.degrees(q[:, 5]), "joint 6 angle (°)")
@@ -68,7 +68,7 @@ def _driver_feature(effect: Effect, data: MeasuredPoints) -> Feature:
     driver = getattr(effect, "driver", "")
     ctx = data.ctx
     source = getattr(effect, "source", None)
-    joint = int(getattr(effect, "joint", 0))
+    joint = int(getattr(effect, "joint", None) or 0)
     if driver == "direction" and source is not None:
         direction = last_motion_direction(data.q, ctx.q_prev)[:, source]
         return Feature(direction, f"direction joint {source + 1} last moved (−1 / +1)", True)
@@ -77,7 +77,8 @@ def _driver_feature(effect: Effect, data: MeasuredPoints) -> Feature:
     for name, field, label in (("temperature", "temp_c", "temperature (°C)"),
                                ("time", "time_s", "time (s)"),
                                ("gravity", "payload_kg", "payload (kg)"),
-                               ("payload", "payload_kg", "payload (kg)")):
+                               ("payload", "payload_kg", "payload (kg)"),
+                               ("overturning", "payload_kg", "payload (kg)")):
         value = getattr(ctx, field)
         if driver == name and value is not None:
             return Feature(np.asarray(value, dtype=float), label)

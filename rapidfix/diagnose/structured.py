@@ -11,6 +11,12 @@ model's BIC gain, n ln(RSS / RSS') − k ln n. The best variant is then fitted a
 judged like any candidate, charged for the choice among all variants screened;
 the whole ranking goes into the report as what the residual correlates with,
 whether or not anything is accepted.
+
+Effects that act on a frame rather than a joint (`FrameDriver`: the tool bending
+under gravity, the base tilting with the overturning moment, a link growing with
+the temperature) are variants too. Their columns are how the predicted points
+move per unit of each parameter (forward differences of the model with the
+effect added), projected and scored the same way.
 """
 
 from __future__ import annotations
@@ -22,9 +28,12 @@ from typing import Any
 import numpy as np
 
 from rapidfix.diagnose.sensitivity import joint_derivatives
+from rapidfix.errors.candidates.frame_driver import FrameDriver
+from rapidfix.errors.candidates.gravity import nominal_robot
 from rapidfix.errors.candidates.joint_driver import JointDriver
 from rapidfix.errors.context import last_motion_direction
-from rapidfix.errors.fit_effects import MeasuredPoints, jacobian
+from rapidfix.errors.effect import Effect
+from rapidfix.errors.fit_effects import MeasuredPoints, jacobian, predict
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
 
@@ -33,13 +42,16 @@ MIN_SPREAD = {"temp_c": 0.2, "time_s": 60.0, "payload_kg": 0.1}
 #: singular values of the unit-scaled, projected regressors below this fraction of the
 #: largest are degenerate (the column duplicates what the model already fits)
 RCOND = 1e-6
+#: links that may grow (1-based: the link after that joint; 6 runs from axis 6 to tool0);
+#: those of no length in the nominal model (coincident axis points) are left out
+LINKS = (1, 2, 3, 4, 5, 6)
 
 
 @dataclass(frozen=True)
 class Screened:
     """One variant's screen: the effect to fit, its linear BIC gain and share of the residual."""
 
-    effect: JointDriver
+    effect: JointDriver | FrameDriver
     score: float
     share: float
     rank: int
@@ -50,11 +62,33 @@ class Screened:
         return self.effect.what()
 
 
+def frame_variants(robot_name: str, data: MeasuredPoints, default_payload_kg: float
+                   ) -> list[FrameDriver]:
+    """The tool and the base moved by gravity (always: the pose turns it), each link
+    grown by the temperature (when the set's temperature varies)."""
+    out = [FrameDriver(frame, robot=robot_name, payload_point_mm=data.ball_mm,
+                       default_payload_kg=default_payload_kg) for frame in ("tool", "base")]
+    temp = data.ctx.temp_c
+    if temp is not None and np.ptp(temp) > MIN_SPREAD["temp_c"]:
+        ref = float(np.mean(temp))
+        out += [FrameDriver("link", robot=robot_name, link=link, reference=ref)
+                for link in LINKS if _link_length(robot_name, link) > 1.0]
+    return out
+
+
+
+def _link_length(robot_name: str, link: int) -> float:
+    robot = nominal_robot(robot_name)
+    points = np.asarray(robot.axis_points, dtype=float)
+    end = np.asarray(robot.home)[:3, 3] if link == 6 else points[link]
+    return float(np.linalg.norm(end - points[link - 1]))
+
+
 def variants(robot_name: str, data: MeasuredPoints, default_payload_kg: float
-             ) -> list[JointDriver]:
-    """Every joint × driver the calibration set can tell anything about."""
+             ) -> list[JointDriver | FrameDriver]:
+    """Every joint × driver and frame × driver the calibration set can tell anything about."""
     ctx = data.ctx
-    out: list[JointDriver] = []
+    out: list[JointDriver | FrameDriver] = []
     payload = ctx.payload_kg
     for j in range(1, 6):  # joint 1's axis is vertical: gravity never loads it
         out.append(JointDriver(j, "gravity", robot=robot_name, payload_point_mm=data.ball_mm,
@@ -74,7 +108,24 @@ def variants(robot_name: str, data: MeasuredPoints, default_payload_kg: float
     for s in range(6):
         out += [JointDriver(j, "angle", source=s) for j in range(6) if j != s]
     out += [JointDriver(j, "own_angle") for j in range(6)]
-    return out
+    return out + frame_variants(robot_name, data, default_payload_kg)
+
+
+def point_columns(model: ErrorModel, robot: Any, data: MeasuredPoints, effect: Effect,
+                  base: np.ndarray) -> np.ndarray:
+    """How the predicted points (3N,) move per unit of each parameter of `effect` added
+    to the model at zero, (3N, P), by forward differences of its steps."""
+    trial = ErrorModel(model.robot, [*model.effects, effect])
+    steps = np.asarray(getattr(effect, "steps", np.full(len(effect.param_names), 1e-6)))
+    cols = np.empty((base.size, steps.size))
+    zero = np.zeros(steps.size)
+    for i, h in enumerate(steps):  # a few parameters, each one vectorised evaluation
+        p = zero.copy()
+        p[i] = h
+        effect.set_params(p)
+        cols[:, i] = (predict(trial, robot, data).ravel() - base) / h
+    effect.set_params(zero)
+    return cols
 
 
 def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_kg: float
@@ -89,9 +140,15 @@ def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_
     rss = float(r_perp @ r_perp) + 1e-300
     n = r.size
     out = []
+    base = r + data.xyz.ravel()  # the current model's predictions
     for eff in variants(model.robot, data, default_payload_kg):  # ~90 small regressions
-        F = np.repeat(eff.regressors(data.q, data.ctx), 3, axis=0)
-        cols = grads[eff.acts_on].T * F
+        if isinstance(eff, FrameDriver):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", OutsideRangeWarning)
+                cols = point_columns(model, robot, data, eff, base)
+        else:
+            F = np.repeat(eff.regressors(data.q, data.ctx), 3, axis=0)
+            cols = grads[eff.acts_on].T * F
         before = np.linalg.norm(cols, axis=0)
         cols -= basis @ (basis.T @ cols)
         norms = np.linalg.norm(cols, axis=0)
@@ -112,8 +169,13 @@ def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_
 
 def ranking_records(screened: list[Screened], top: int = 12) -> list[dict[str, Any]]:
     """JSON rows of the best-ranked variants: where, driven by what, how strongly."""
-    return [{"joint": v.effect.joint + 1, "driver": v.effect.driver,
-             "source_joint": None if v.effect.source is None else v.effect.source + 1,
+    return [{"joint": _one_based(getattr(v.effect, "joint", None)),
+             "frame": getattr(v.effect, "frame", "joint"), "driver": v.effect.driver,
+             "source_joint": _one_based(getattr(v.effect, "source", None)),
              "description": v.label, "linear_bic_gain": v.score,
              "share_of_calibration_residual": v.share, "parameters": v.rank}
             for v in screened[:top]]
+
+
+def _one_based(index: int | None) -> int | None:
+    return None if index is None else index + 1

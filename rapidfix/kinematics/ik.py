@@ -38,8 +38,10 @@ WRIST_TOL = 1e-7
 
 CHUNK = 4096
 """Poses per numpy chunk: temporaries of a chunk stay in the L2/L3 cache."""
-LIMIT_TOL = 1e-9
-"""rad by which an angle may pass a joint limit and still count as inside."""
+LIMIT_TOL = 1e-7
+"""rad by which an angle may pass a joint limit and still count as inside. Near a
+stretched elbow the closed form is good to about √eps (~1e-8 rad), so a pose taught at
+a limit must not be refused for that; 1e-7 rad is 0.1 µm at a metre."""
 RIGID_TOL = 1e-6
 """Largest deviation from an orthonormal rotation and a [0, 0, 0, 1] last row."""
 _FIXED_POINT_STEPS = 6

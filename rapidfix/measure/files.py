@@ -1,13 +1,16 @@
 """Measurement files (version 1): read, validate and write setup.toml and the CSV tables.
 
 A measurement set is `setup.toml` plus CSV tables (header row, comma separated,
-`.` as decimal mark, rows in execution order):
+`.` as decimal mark, rows in execution order). Other tools' exports are read too: a
+header separated by semicolons or tabs sets the delimiter (then `,` is also read as a
+decimal mark), and lines starting with `#` are comments:
 
 - sweeps:  ``sweep_joint,j1,j2,j3,j4,j5,j6,repeat,x,y,z``
 - points:  ``point_id,j1,j2,j3,j4,j5,j6,x,y,z``, optional ``ball`` (the target-ball
   nest each row measured, an index into the setup's `smr_offsets_mm`, default 0)
 - optional in either: ``payload_kg``, ``time_s``, ``temp_c``; further numeric
-  columns are kept in ``extra`` (e.g. ``length_mm`` of a ballbar run).
+  columns are kept in ``extra`` (e.g. ``length_mm`` of a ballbar run); further text
+  columns (notes, time stamps) are ignored with a warning.
 
 The setup declares one ball (``smr_offset_mm = [x, y, z]``) or several nests on the
 flange (``smr_offsets_mm = [[x, y, z], ...]``): one ball shows where the flange is,
@@ -327,21 +330,43 @@ class _RawTable:
     header: tuple[str, ...]
     cells: list[list[str]]
     rows: np.ndarray
+    decimal_comma: bool = False
 
     def column(self, name: str) -> list[str]:
         idx = self.header.index(name)
         return [r[idx] for r in self.cells]
 
+    def numeric_texts(self, name: str) -> list[str]:
+        """A column's cells as Python reads numbers (decimal commas made points)."""
+        texts = self.column(name)
+        return [t.replace(",", ".") for t in texts] if self.decimal_comma else texts
+
+
+#: delimiters a header may use, in the order they are looked for
+_DELIMITERS = (",", ";", "\t")
+
+
+def _delimiter(text: str) -> str:
+    """The delimiter of the first line that is neither blank nor a comment."""
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped and not stripped.startswith("#"):
+            return next((d for d in _DELIMITERS if d in line), ",")
+    return ","
+
 
 def _read_raw(path: Path, required: Sequence[str]) -> _RawTable:
     text = read_measurement_text(path)
-    reader = csv.reader(io.StringIO(text))
+    delimiter = _delimiter(text)
+    reader = csv.reader(io.StringIO(text), delimiter=delimiter)
     header: tuple[str, ...] | None = None
     cells: list[list[str]] = []
     rows: list[int] = []
     try:
         for record in reader:
             if not record or all(not c.strip() for c in record):
+                continue
+            if record[0].lstrip().startswith("#"):
                 continue
             if header is None:
                 header = tuple(c.strip().lower() for c in record)
@@ -369,12 +394,13 @@ def _read_raw(path: Path, required: Sequence[str]) -> _RawTable:
                                    file=path, row=1, column=name)
     if not cells:
         raise MeasurementError("no data rows after the header", file=path)
-    return _RawTable(path, header, cells, np.asarray(rows, dtype=int))
+    return _RawTable(path, header, cells, np.asarray(rows, dtype=int),
+                     decimal_comma=delimiter != ",")
 
 
 def _numbers(raw: _RawTable, name: str) -> np.ndarray:
     """A column as float64; the first non-numeric, NaN or infinite cell is an error."""
-    texts = raw.column(name)
+    texts = raw.numeric_texts(name)
     try:
         values = np.asarray(texts, dtype=float)
     except ValueError:
@@ -472,7 +498,15 @@ def _optional_columns(raw: _RawTable, skip: Sequence[str]) -> tuple[dict, dict]:
                                    f"[{low:g}, {high:g}]", file=raw.path,
                                    row=int(raw.rows[i]), column=name)
     known = set(skip) | set(CONDITION_COLUMNS)
-    extra = {name: _numbers(raw, name) for name in raw.header if name not in known}
+    extra = {}
+    for name in raw.header:
+        if name in known:
+            continue
+        try:
+            extra[name] = _numbers(raw, name)
+        except MeasurementError:
+            warnings.warn(f"{raw.path}: column {name!r} is not numeric; it is ignored",
+                          MeasurementWarning, stacklevel=3)
     return conditions, extra
 
 

@@ -124,7 +124,8 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
     q_all = np.vstack(blocks)
     n_all = len(q_all)
 
-    compliance = bool({"joint_compliance", "wrist_compliance"} & set(vr.errors.effects))
+    compliance = bool({"joint_compliance", "wrist_compliance", "tool_bending", "base_tilt"}
+                      & set(vr.errors.effects))
     thermal = vr.errors.needs_temperature
     payload = np.full(n_all, payload_kg)
     if compliance:  # calibration and validation points carry random payloads

@@ -31,6 +31,19 @@ them by the joint they act on and what drives them):
   joint last moved (a wrist gear train or a dress pack that pulls on the next axis);
 - ``joint_coupling2``: one joint's error follows the second harmonic of another
   joint's angle (an elliptic bearing or gear, twice per turn).
+
+Effects that act where no joint error can (issue #14, frames: tool, base, link):
+
+- ``tool_bending``: the tool bends at a compliant mount (a tool changer, a slender
+  adapter) under the gravity moment of its own body and the payload about a hinge
+  on the flange axis; bending only, the mount is stiff in torsion. Everything on
+  the flange (the target ball, every tool) turns with it;
+- ``base_tilt``: a compliant foundation: the base tilts about horizontal axes
+  through a pivot below the base origin, in proportion to the overturning moment of
+  the arm's links and the payload about the base;
+- ``link_thermal``: one link (the lower or the upper arm) grows by α·L·ΔT (α of
+  steel) as the drive next to it warms up once the work cycle starts (at
+  `cycle_start_s`, the session's points; the sweeps are taken cold).
 """
 
 from __future__ import annotations
@@ -53,6 +66,10 @@ EFFECTS: tuple[str, ...] = (
     "encoder_thermal",
     "direction_zero_shift",
     "joint_coupling2",
+    # -- issue #14, frames (tool, base, link) --
+    "tool_bending",
+    "base_tilt",
+    "link_thermal",
 )
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s², base z is up
@@ -124,6 +141,14 @@ class TrueErrors:
     direction_shift: dict[str, float] | None = None
     #: source, target (0-based), amp_rad, phase_rad of a second harmonic
     coupling2: dict[str, float] | None = None
+    # -- issue #14, frames --
+    #: k_rad_per_nm, tool_kg, tool_cog_mm (on the flange axis), hinge_mm
+    tool_bending: dict[str, float] | None = None
+    #: k_rad_per_nm, pivot_depth_mm
+    base_tilt: dict[str, float] | None = None
+    #: link (1-based: the link after that joint), alpha_per_k, t_ref_c, rise_k, tau_s,
+    #: cycle_start_s
+    link_thermal: dict[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -139,7 +164,10 @@ class TrueErrors:
               "wrist_compliance": self.wrist is not None,
               "encoder_thermal": self.encoder is not None,
               "direction_zero_shift": self.direction_shift is not None,
-              "joint_coupling2": self.coupling2 is not None}
+              "joint_coupling2": self.coupling2 is not None,
+              "tool_bending": self.tool_bending is not None,
+              "base_tilt": self.base_tilt is not None,
+              "link_thermal": self.link_thermal is not None}
         return [name for name in EFFECTS if on[name]]
 
     # ---- drawing ---------------------------------------------------------------------
@@ -190,6 +218,7 @@ class TrueErrors:
         coupling2 = {"source": src3, "target": dst3,
                      "amp_rad": float(np.radians(rng.uniform(0.015, 0.03))),
                      "phase_rad": float(rng.uniform(0.0, 2.0 * np.pi))}
+        frames = _draw_frames(rng)
         on = set(effects)
         geometry = "link_geometry" in on
         return cls(
@@ -207,6 +236,7 @@ class TrueErrors:
             encoder=encoder if "encoder_thermal" in on else None,
             direction_shift=shift if "direction_zero_shift" in on else None,
             coupling2=coupling2 if "joint_coupling2" in on else None,
+            **{key: value for key, value in frames.items() if key in on},
         )
 
     # ---- evaluation ------------------------------------------------------------------
@@ -219,7 +249,8 @@ class TrueErrors:
     @property
     def needs_temperature(self) -> bool:
         """True when some error depends on the arm's temperature."""
-        return self.thermal is not None or self.encoder is not None
+        return (self.thermal is not None or self.encoder is not None
+                or self.link_thermal is not None)
 
     def joint_delta(self, q: np.ndarray, direction: np.ndarray | None,
                     temp_c: np.ndarray | None = None) -> np.ndarray:
@@ -256,6 +287,10 @@ class TrueErrors:
             e = self.encoder
             cycle = np.maximum(t - e.get("cycle_start_s", 0.0), 0.0)
             out = out + e["swing_k"] * np.sin(2.0 * np.pi * cycle / e["period_s"])
+        if self.link_thermal is not None:
+            lt = self.link_thermal
+            warm = np.maximum(t - lt["cycle_start_s"], 0.0)
+            out = out + lt["rise_k"] * -np.expm1(-warm / lt["tau_s"])
         return out
 
     def thermal_scale(self, temp_c: np.ndarray | None) -> np.ndarray | float:
@@ -306,6 +341,9 @@ class TrueErrors:
                                     "target_joint": int(c["target"]) + 1,
                                     "amplitude_deg": float(np.degrees(c["amp_rad"])),
                                     "phase_rad": c["phase_rad"]}
+        for key in ("tool_bending", "base_tilt", "link_thermal"):
+            if getattr(self, key) is not None:
+                d[key] = dict(getattr(self, key))
         return d
 
     @classmethod
@@ -342,6 +380,9 @@ class TrueErrors:
                 "source": coup2["source_joint"] - 1, "target": coup2["target_joint"] - 1,
                 "amp_rad": float(np.radians(coup2["amplitude_deg"])),
                 "phase_rad": coup2["phase_rad"]},
+            tool_bending=d.get("tool_bending"),
+            base_tilt=d.get("base_tilt"),
+            link_thermal=d.get("link_thermal"),
         )
 
 
@@ -402,3 +443,84 @@ def torque_about(axis_dir: np.ndarray, axis_point: np.ndarray, positions: np.nda
     lever = (positions - axis_point[:, None, :]) * 1e-3
     force = masses[..., None] * GRAVITY
     return np.einsum("nbi,ni->n", np.cross(lever, force), axis_dir)
+
+
+# ---- issue #14: effects on frames (tool, base, link) ---------------------------------
+
+
+def _draw_frames(rng: np.random.Generator) -> dict[str, dict[str, float]]:
+    """Parameters of the frame effects, from their own stream (derived from `rng`'s
+    state without advancing it, so no other effect's draw changes)."""
+    state = rng.bit_generator.state["state"]
+    own = np.random.default_rng([int(state["state"]) % 2**63, int(state["inc"]) % 2**63,
+                                 1402])
+    return {
+        "tool_bending": {"k_rad_per_nm": float(own.uniform(1.2e-4, 2.5e-4)),
+                         "tool_kg": float(own.uniform(2.0, 4.0)),
+                         "tool_cog_mm": float(own.uniform(80.0, 160.0)),
+                         "hinge_mm": float(own.uniform(0.0, 40.0))},
+        "base_tilt": {"k_rad_per_nm": float(own.uniform(2e-7, 4e-7)),
+                      "pivot_depth_mm": float(own.uniform(0.0, 300.0))},
+        "link_thermal": {"link": int(own.choice([2, 3])), "alpha_per_k": 11.5e-6,
+                         "t_ref_c": 20.0, "rise_k": float(own.uniform(12.0, 20.0)),
+                         "tau_s": float(own.uniform(150.0, 300.0)), "cycle_start_s": 3000.0},
+    }
+
+
+def _rotations(omega: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of small rotation vectors (N, 3) rad."""
+    return Rotation.from_rotvec(omega).as_matrix()
+
+
+def tool_bend(bend: dict[str, float], R_flange: np.ndarray, payload_kg: np.ndarray,
+              payload_cog_mm: np.ndarray) -> np.ndarray:
+    """The bent tool's pose on the flange (N, 4, 4): a rotation about the hinge on the
+    flange axis by compliance × the bending part of the gravity moment of the tool
+    body and the payload (flange frame, mm)."""
+    n = R_flange.shape[0]
+    down = np.einsum("nji,j->ni", R_flange, GRAVITY)  # gravity (m/s²) in the flange frame
+    hinge = np.array([0.0, 0.0, bend["hinge_mm"]])
+    tool_at = np.array([0.0, 0.0, bend["tool_cog_mm"]])
+    moment = (np.cross((tool_at - hinge) * 1e-3, bend["tool_kg"] * down)
+              + np.cross((payload_cog_mm - hinge) * 1e-3,
+                         np.asarray(payload_kg, dtype=float)[:, None] * down))
+    moment[:, 2] = 0.0  # stiff in torsion
+    R = _rotations(bend["k_rad_per_nm"] * moment)
+    out = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    out[:, :3, :3] = R
+    out[:, :3, 3] = hinge - R @ hinge
+    return out
+
+
+def base_tilt(tilt: dict[str, float], axis_points: np.ndarray, payload_at: np.ndarray,
+              payload_kg: np.ndarray) -> np.ndarray:
+    """The base's tilt (N, 4, 4): a turn about horizontal axes through the pivot below
+    the base origin by compliance × the overturning moment about the base origin of
+    the lumped links (see `_BODIES`) and the payload at `payload_at` (N, 3) mm."""
+    n = axis_points.shape[0]
+    centres = [axis_points[:, a] + frac * (axis_points[:, b] - axis_points[:, a])
+               for _, a, b, frac in _BODIES] + [payload_at]
+    masses = [np.full(n, LINK_MASSES_KG[name]) for name, *_ in _BODIES]
+    masses.append(np.broadcast_to(np.asarray(payload_kg, dtype=float), (n,)))
+    moment = sum(np.cross(c * 1e-3, m[:, None] * GRAVITY) for c, m in zip(centres, masses))
+    moment[:, 2] = 0.0  # the foundation turns about horizontal axes only
+    R = _rotations(tilt["k_rad_per_nm"] * moment)
+    pivot = np.array([0.0, 0.0, -tilt["pivot_depth_mm"]])
+    out = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    out[:, :3, :3] = R
+    out[:, :3, 3] = pivot - R @ pivot
+    return out
+
+
+def link_growth(growth: dict[str, float], axis_dirs: np.ndarray, axis_points: np.ndarray,
+                home: np.ndarray, q: np.ndarray, temp_c: np.ndarray) -> np.ndarray:
+    """Displacement (N, 3) mm of the distal chain when link L grows by α L (T − T_ref):
+    the link's home vector, turned by the joints before it."""
+    link = int(growth["link"])
+    end = home[:3, 3] if link == 6 else axis_points[link]
+    v = end - axis_points[link - 1]
+    grown = growth["alpha_per_k"] * (np.asarray(temp_c, dtype=float) - growth["t_ref_c"])
+    R = np.broadcast_to(np.eye(3), (q.shape[0], 3, 3))
+    for j in range(link):  # the joints before the link
+        R = R @ _rotations(q[:, j:j + 1] * axis_dirs[j])
+    return grown[:, None] * (R @ v)

@@ -23,7 +23,14 @@ import numpy as np
 
 from rapidfix.kinematics import RobotModel, load_robot
 from rapidfix.sim.tracker import VirtualTracker
-from rapidfix.sim.true_errors import TrueErrors, gravity_torque, torque_about
+from rapidfix.sim.true_errors import (
+    TrueErrors,
+    base_tilt,
+    gravity_torque,
+    link_growth,
+    tool_bend,
+    torque_about,
+)
 
 DEFAULT_ROBOT = "IRB1600-10/1.45"
 #: Target ball in the flange frame, mm: 100 mm off the joint-6 axis so joint 6 draws a circle.
@@ -222,16 +229,58 @@ class VirtualRobot:
                    ball: Any = None) -> np.ndarray:
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
-        return self._ball(self.actual_joints(q, ctx, jitter), scale, ball)
+        q_act = self.actual_joints(q, ctx, jitter)
+        if not self._moves_frames:
+            return self._ball(q_act, scale, ball)
+        T = self._flange(q_act, ctx, scale)
+        local = np.broadcast_to(self._nest(ball, len(q_act)), (len(q_act), 3))
+        return np.einsum("nij,nj->ni", T[:, :3, :3], local) + T[:, :3, 3]
+
+    # ---- issue #14: effects on frames (tool, base, link) -----------------------------
+
+    @property
+    def _moves_frames(self) -> bool:
+        e = self.errors
+        return (e.tool_bending is not None or e.base_tilt is not None
+                or e.link_thermal is not None)
+
+    def _flange(self, q_act: np.ndarray, ctx: Any, scale: np.ndarray | float) -> np.ndarray:
+        """The flange poses (N, 4, 4) of actual joints with the arm's growth, a link's
+        growth, the tool's bend (the tool frame on the flange) and the base's tilt."""
+        e = self.errors
+        n = len(q_act)
+        T = self.actual_model.fk(q_act)
+        T[:, :3, 3] *= np.reshape(scale, (-1, 1))
+        if e.link_thermal is not None:
+            temp = self.temperature(ctx, n)
+            if temp is not None:
+                m = self.actual_model
+                T[:, :3, 3] += link_growth(e.link_thermal, np.asarray(m.axis_dirs),
+                                           np.asarray(m.axis_points), np.asarray(m.home),
+                                           q_act, temp)
+        if e.tool_bending is None and e.base_tilt is None:
+            return T
+        payload = _field(ctx, "payload_kg")
+        payload = np.broadcast_to(np.asarray(self.payload_kg if payload is None else payload,
+                                             dtype=float), (n,))
+        at = self._payload_point(T, ctx)
+        if e.tool_bending is not None:
+            cog = _field(ctx, "payload_cog_mm")
+            cog = np.broadcast_to(np.asarray(self.true_smr_offset_mm if cog is None else cog,
+                                             dtype=float), (n, 3))
+            T = T @ tool_bend(e.tool_bending, T[:, :3, :3], payload, cog)
+        if e.base_tilt is not None:
+            _, points = self.actual_model.joint_frames(q_act)
+            T = base_tilt(e.base_tilt, points, at, payload) @ T
+        return T
 
     def tcp_poses(self, q_cmd: np.ndarray, tool: np.ndarray, ctx: Any = None, *,
                   jitter: np.ndarray | None = None) -> np.ndarray:
         """Where a tool (4,4) or (N,4,4) on the flange really is (N,4,4), base frame, for
         commanded q_cmd (N,6) rad run in `ctx` (the arm grows about the base)."""
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
-        T = self.actual_model.fk(self.actual_joints(q, ctx, jitter))
         scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
-        T[:, :3, 3] *= np.reshape(scale, (-1, 1))
+        T = self._flange(self.actual_joints(q, ctx, jitter), ctx, scale)
         return T @ np.asarray(tool, dtype=float)
 
     def ball_positions(self, q_cmd: np.ndarray, ctx: Any = None, *,

@@ -7,6 +7,11 @@ that shifts with the direction another joint last moved, a coupling through the
 second harmonic of another joint's angle. The diagnosis must name the right joint
 and driver, end at or below 1.5× the noise floor on validation points it never
 fitted, and its model must compensate a real program on the robot.
+
+Effects no joint error describes act on a frame: a tool that bends under its own
+weight and the payload's, a base that tilts with the overturning moment (a
+compliant foundation), a link that grows as a drive next to it warms. They must be
+named by the frame and the driver, with the same limits.
 """
 
 import numpy as np
@@ -77,6 +82,46 @@ def test_structured_parameters_match_the_truth(cell):
     effect = next(e for e in result.model.effects if e.type_name == "joint_driver")
     truth = data.truth["errors"]["encoder_thermal"]["ppm_per_k"]
     assert effect.value("scale_ppm_per_k") == pytest.approx(truth, rel=0.2)
+
+
+#: simulator effect → (frame, driver) of the structured effect that describes it
+FRAMES = {
+    "tool_bending": ("tool", "gravity"),
+    "base_tilt": ("base", "overturning"),
+    "link_thermal": ("link", "temperature"),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effect", list(FRAMES))
+def test_hidden_frame_effect_is_traced_to_its_frame_and_driver(cell, effect):
+    frame, driver = FRAMES[effect]
+    seeds = cell.detectable_seeds((effect,), SEEDS)
+    assert len(seeds) == SEEDS
+    for seed in seeds:
+        data, _, result = cell.scenario((effect,), seed)
+        assert result.accepted and set(result.accepted) == {"joint_driver"}, (
+            seed, result.statement)
+        first = next(e for e in result.model.effects if e.type_name in ("joint_driver",
+                                                                          "frame_driver"))
+        assert (getattr(first, "frame", None), first.driver) == (frame, driver), (
+            seed, result.statement)
+        truth = data.truth["errors"][effect]
+        if frame == "link":
+            assert first.link == truth["link"], (seed, result.statement)
+        assert first.what() in result.statement
+        after = result.selection.final.validation.mean_mm
+        assert after <= 1.5 * _floor(data), (seed, after, _floor(data))
+        # the compliance against the truth: within three of its standard deviations
+        # (base, link) or 30 % (the tool's, well determined by the payload's moment)
+        k, sd = first.params()[:2], first.uncertainty[:2]
+        if frame == "tool":
+            assert k[1] == pytest.approx(truth["k_rad_per_nm"], rel=0.3), seed
+        elif frame == "base":
+            assert abs(k[0] - truth["k_rad_per_nm"]) <= 3 * sd[0], (seed, k[0], sd[0])
+        else:
+            assert abs(k[1] - 1e6 * truth["alpha_per_k"]) <= 3 * sd[1], (seed, k[1], sd[1])
+        cell.check_on_robot((effect,), seed)
 
 
 @pytest.mark.parametrize("seed", range(1, 21))

@@ -256,3 +256,15 @@ def test_arm_fully_stretched_at_the_edge_of_reach(name, stretched_deg):
     T_far = T.copy()
     T_far[0, :3, 3] += outward / np.linalg.norm(outward)
     assert robot.ik(T_far).status[0] == IKStatus.UNREACHABLE
+
+
+def test_pose_at_a_limit_with_a_stretched_elbow_keeps_its_own_solution():
+    # found by hypothesis: the stretched elbow costs the closed form ~1e-8 rad, and
+    # joint 6 at +400° (its limit) was then refused as 7.6e-9 rad beyond it
+    robot = load_robot("IRB1600-10/1.45")
+    lo, hi = robot.limits[:, 0], robot.limits[:, 1]
+    # (-180, 30, -90, -200, -115, 400)°, computed as hypothesis computes it
+    q = (lo + np.array([0, 0.5, 0.5, 0, 0, 1]) * (hi - lo))[None]
+    sols = robot.ik(robot.fk(q), q_prev=q)
+    d = np.abs(sols.q[sols.valid] - q).max(axis=1)
+    assert d.min() < 1e-7

@@ -315,3 +315,27 @@ def test_a_ball_column_is_an_integer_and_the_sweeps_use_nest_0(tmp_path):
     sweeps[1:] = [line + (",1" if i == 2 else ",0") for i, line in enumerate(sweeps[1:])]
     with pytest.raises(MeasurementError, match=r"row 4, column 'ball'.*ball 0 only"):
         read_sweeps(write(tmp_path, "s.csv", "\n".join(sweeps) + "\n"))
+
+
+@pytest.mark.parametrize("delimiter", [";", "\t"])
+def test_semicolon_and_tab_exports_with_decimal_commas_read_as_the_comma_file(
+        tmp_path, delimiter):
+    plain = read_points(write(tmp_path, "p.csv", POINTS))
+    other = "\n".join(delimiter.join(c.replace(".", ",") for c in line.split(","))
+                      for line in POINTS.splitlines()) + "\n"
+    table = read_points(write(tmp_path, "o.csv", other))
+    assert table.point_id.tolist() == plain.point_id.tolist()
+    assert np.array_equal(table.q, plain.q) and np.array_equal(table.xyz, plain.xyz)
+    assert np.array_equal(table.payload_kg, plain.payload_kg)
+
+
+def test_comment_lines_and_text_columns_are_skipped_with_a_warning(tmp_path):
+    lines = POINTS.splitlines()
+    text = "# exported by a tracker\n# units: mm, deg\n" + lines[0] + ",note\n"
+    text += "\n".join(f"{line},{word}" for line, word in zip(lines[1:], ["ok", "re-shot", "ok"]))
+    text = text.replace("P2,", "# a comment between rows\nP2,") + "\n"
+    with pytest.warns(MeasurementWarning, match="'note' is not numeric"):
+        table = read_points(write(tmp_path, "p.csv", text))
+    plain = read_points(write(tmp_path, "plain.csv", POINTS))
+    assert np.array_equal(table.xyz, plain.xyz) and "note" not in table.extra
+    assert table.rows.tolist() == [4, 6, 7]  # line numbers in the file, comments counted

@@ -7,7 +7,9 @@ unexplained: `compliance` (joints 2 and 3 deflecting under gravity and payload),
 joint's error depending on another's angle), `registration` (tracker frame and
 scale) and `joint_reference` (the per-joint model's offsets and first harmonics re-referenced
 on new data), and `joint_driver`: one joint's error as a low-order function of one
-driver (gravity torque, temperature, time, payload, another joint's direction or angle).
+driver (gravity torque, temperature, time, payload, another joint's direction or angle),
+and `frame_driver`: the tool, the base or one link moved by a driver (the tool bending
+under gravity, the base tilting with the overturning moment, a link growing with heat).
 All are registered with `rapidfix.errors.effect` by their `type_name`.
 """
 
@@ -15,6 +17,7 @@ from rapidfix.errors.candidates import (  # noqa: F401  (registers every effect)
     backlash,
     compliance,
     coupling,
+    frame_driver,
     geometry,
     gravity,
     joint_driver,
