@@ -30,6 +30,7 @@ from rapidfix.measure.files import (
     PointTable,
     Setup,
     SweepTable,
+    ball_offsets,
     read_points,
     read_setup,
     read_sweeps,
@@ -200,9 +201,11 @@ def joint_curves(model: ErrorModel, joints: Sequence[Any]) -> list[dict[str, np.
 
 
 def ideal_ball(robot: RobotModel, q: np.ndarray, smr_offset_mm: np.ndarray) -> np.ndarray:
-    """Where the nominal robot puts the target ball (N, 3) mm for joints q (N, 6) rad."""
+    """Where the nominal robot puts the target ball (N, 3) mm for joints q (N, 6) rad;
+    one ball (3,) or each row's own (N, 3)."""
     T = robot.fk(np.atleast_2d(q))
-    return T[:, :3, :3] @ np.asarray(smr_offset_mm, dtype=float) + T[:, :3, 3]
+    ball = np.broadcast_to(np.asarray(smr_offset_mm, dtype=float), (T.shape[0], 3))
+    return np.einsum("nij,nj->ni", T[:, :3, :3], ball) + T[:, :3, 3]
 
 
 def to_robot_frame(registration: Any, p_tracker: np.ndarray) -> np.ndarray:
@@ -285,8 +288,9 @@ def predicted_before_after(outcome: FitOutcome, points_csv: str | Path) -> Befor
     table = read_points(points_csv, reach_mm=robot_reach_mm(outcome.robot))
     setup, robot = outcome.setup, outcome.robot
     measured = to_robot_frame(outcome.analysis.registration, table.xyz)
-    nominal = ideal_ball(robot, table.q, setup.smr_offset_mm)
-    predicted = outcome.model.predict_ball(robot, table.q, setup.smr_offset_mm,
+    balls = ball_offsets(table, setup)
+    nominal = ideal_ball(robot, table.q, balls)
+    predicted = outcome.model.predict_ball(robot, table.q, balls,
                                            points_context(table, setup, table.q))
     return BeforeAfter(nominal, measured, nominal + (measured - predicted))
 
@@ -311,12 +315,14 @@ def execute_before_after(
     q_ideal = table.q
     q_cmd = compensate_table(outcome, table)
     registration = outcome.analysis.registration
+    balls = ball_offsets(table, setup)
+    nest = {} if table.ball is None else {"ball": table.ball}
     runs = []
     for k, q in enumerate((q_ideal, q_cmd)):
         ctx = points_context(table, setup, q)
-        measured = cell_robot.measure(q, ctx, frame="tracker", seed=seed * 1000 + k)
+        measured = cell_robot.measure(q, ctx, frame="tracker", seed=seed * 1000 + k, **nest)
         runs.append(to_robot_frame(registration, measured))
-    return BeforeAfter(ideal_ball(outcome.robot, q_ideal, setup.smr_offset_mm), *runs)
+    return BeforeAfter(ideal_ball(outcome.robot, q_ideal, balls), *runs)
 
 
 def run_points_before_after(

@@ -70,6 +70,10 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
     command's words (its flag), not the library's (its field name)."""
     from rapidfix.postprocess.rewrite import RewriteOptions
 
+    if args.approach and args.emit != "jointtargets":
+        raise UsageError(f"--approach needs --emit jointtargets (not {args.emit}): approach "
+                         "points are joint positions, and a robtarget leaves the joints to "
+                         "the controller")
     try:
         return RewriteOptions(
             emit=args.emit,

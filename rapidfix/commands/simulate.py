@@ -41,6 +41,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="gross tracker errors added to N sweep rows")
     parser.add_argument("--payload", type=float, default=0.0, metavar="KG",
                         help="payload of the sweeps and the ballbar run")
+    parser.add_argument("--balls", type=int, default=2, choices=(1, 2), metavar="N",
+                        help="target-ball nests the calibration and validation points are "
+                        "measured on, row by row (default 2: the flange's turn is measured; "
+                        "1: one ball, as older sets)")
     parser.add_argument("--force", action="store_true", help="overwrite an existing set")
     from rapidfix.commands.simulate_program import add_program_arguments
 
@@ -70,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
                         robot=args.robot, overwrite=args.force,
                         n_calibration=args.calibration_points,
                         n_validation=args.validation_points, repeats=args.repeats,
-                        step_deg=args.step, n_outliers=args.outliers, payload_kg=args.payload)
+                        step_deg=args.step, n_outliers=args.outliers, payload_kg=args.payload,
+                        balls=args.balls)
     truth = json.loads((out / "truth.json").read_text(encoding="utf-8"))
     effects = ", ".join(truth["errors"]["effects"]) or "per-joint errors only"
     floor = truth["noise_floor"]["mean_tcp_error_mm"]

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
@@ -178,9 +179,15 @@ class LoopRun:
 
 
 def run_on_robot(virtual: Any, program: LoopProgram, text: str, inserted: set[str],
-                 temperature_c: float | None = None) -> LoopRun:
+                 temperature_c: float | None = None, *,
+                 joint1_zero_rad: float | None = None) -> LoopRun:
     """Execute `text` (the program, or its rewrite with intermediate points `inserted`)
-    on the virtual robot, every move in `program`'s conditions (module doc)."""
+    on the virtual robot, every move in `program`'s conditions (module doc).
+
+    The errors are taken after the best joint-1 gauge of this run (`align_axis1`), or,
+    with `joint1_zero_rad`, after turning back a known constant joint-1 error: the
+    gauge a model's base frame was registered in (a simulated set's truth states it),
+    where a model's prediction can be compared with the run as it is."""
     robot = virtual.robot
     parsed = parse_program(text.encode(), "loop.mod")
     execution = commanded_motions(parsed, robot)
@@ -197,7 +204,13 @@ def run_on_robot(virtual: Any, program: LoopProgram, text: str, inserted: set[st
     tools = np.array([_frame(t[1], t[2]) for t in TOOLS])[program.tool[owner]]
     actual = virtual.tcp_poses(q, tools, ctx)[dest][:, :3, 3]
     intended = (robot.fk(program.q) @ tools[dest])[:, :3, 3]
-    aligned = align_axis1(robot, actual, intended)
+    if joint1_zero_rad is None:
+        aligned = align_axis1(robot, actual, intended)
+    else:
+        axis = np.asarray(robot.axis_dirs[0], dtype=float)
+        base = np.asarray(robot.axis_points[0], dtype=float)
+        back = Rotation.from_rotvec(-float(joint1_zero_rad) * axis).as_matrix()
+        aligned = (actual - base) @ back.T + base
     return LoopRun(np.linalg.norm(aligned - intended, axis=1))
 
 

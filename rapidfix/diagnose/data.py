@@ -15,7 +15,7 @@ import numpy as np
 from rapidfix.errors.candidates.backlash import last_motion_direction
 from rapidfix.errors.context import Context
 from rapidfix.errors.fit_effects import MeasuredPoints
-from rapidfix.measure.files import PointTable, Setup
+from rapidfix.measure.files import PointTable, Setup, ball_offsets
 
 #: per-axis tracker σ assumed when neither the model nor the setup states one (mm)
 DEFAULT_SIGMA_MM = 0.01
@@ -28,8 +28,9 @@ def measured_points(table: PointTable, setup: Setup) -> MeasuredPoints:
     payload = table.payload_kg if table.payload_kg is not None else setup.payload_kg
     ctx = Context.from_rows(table.q, payload_kg=payload, time_s=table.time_s,
                             temp_c=table.temp_c)
+    balls = None if table.ball is None else ball_offsets(table, setup)
     return MeasuredPoints(np.asarray(table.q, dtype=float), np.asarray(table.xyz, dtype=float),
-                          ctx, np.asarray(setup.smr_offset_mm, dtype=float))
+                          ctx, np.asarray(setup.smr_offset_mm, dtype=float), balls)
 
 
 def with_known_history(points: MeasuredPoints) -> MeasuredPoints:
@@ -44,8 +45,7 @@ def with_known_history(points: MeasuredPoints) -> MeasuredPoints:
     known = (last_motion_direction(points.q, points.ctx.q_prev) != 0).all(axis=1)
     if known.all() or known.sum() < len(known) // 2:
         return points
-    return MeasuredPoints(points.q[known], points.xyz[known], points.ctx.take(known),
-                          points.ball_mm)
+    return points.take(known)
 
 
 def noise_sigma_mm(statistics: dict[str, Any], setup: Setup) -> tuple[float, str]:

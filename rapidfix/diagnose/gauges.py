@@ -15,7 +15,11 @@ that no measured point moves.
   with moving it by −ω × b, are invisible. The per-joint sweeps, analysed with the
   declared ball, put a ball's tangential error into joint 6's zero; a program's
   tools sit elsewhere on the flange and feel that turn in full (0.1° is 0.3 mm at
-  a 160 mm TCP). Two or more ball positions on the flange measure it instead.
+  a 160 mm TCP). Two or more ball positions on the flange measure it instead:
+  with two nests only the turn about the line through both stays unseen (a rigid
+  body held at two points can still turn about the line joining them), with three
+  not in a line nothing does, and the directions left are found from the balls the
+  rows measured, so with several nests there is less (or nothing) to set.
 
 Not set here: with link geometry, moving every joint axis (2–6) and tool0 along
 axis 1, and the tracker the other way, is invisible too (the arm's height above
@@ -63,6 +67,8 @@ class GaugeChange:
     home_shift_mm: np.ndarray
     ball_mm: np.ndarray
     point_change_mm: float
+    #: how many distinct ball positions the measured rows had
+    balls: int = 1
 
     def describe(self) -> str:
         """One sentence for the report."""
@@ -72,10 +78,16 @@ class GaugeChange:
                          f"and shifted by {self.home_shift_mm.round(3)} mm")
         if np.any(self.ball_mm):
             parts.append(f"the ball's offset by {self.ball_mm.round(3)} mm")
-        return ("One target ball does not show how the flange turns about it; that part was "
-                "set by the physical sizes of the terms (maximum a posteriori): "
-                + ", ".join(parts) + f" (measured points moved by at most "
-                f"{self.point_change_mm:.1e} mm). Two ball positions would measure it.")
+        if self.balls == 1:
+            unseen = "One target ball does not show how the flange turns about it"
+            advice = " Two ball positions would measure most of it, three all of it."
+        else:
+            unseen = (f"{self.balls} target balls in a line do not show how the flange turns "
+                      "about that line")
+            advice = " A third ball off that line would measure it."
+        return (unseen + "; that part was set by the physical sizes of the terms (maximum "
+                "a posteriori): " + ", ".join(parts) + f" (measured points moved by at most "
+                f"{self.point_change_mm:.1e} mm)." + advice)
 
 
 def _first(model: ErrorModel, kind: type) -> Any:
@@ -96,7 +108,9 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
     """Move `model` (its effects are replaced) to the most probable point of its unseen flange turn.
 
     Does nothing (returns None) unless the model frees a flange translation and
-    re-references joint 6, or when the move would change a measured point.
+    re-references joint 6, when the balls the rows measured leave no such turn unseen
+    (three nests not in a line; two, with only a tool offset), or when the move would
+    change a measured point.
     """
     reference = _first(model, JointReference)
     geometry = _first(model, LinkGeometry)
@@ -106,26 +120,34 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
     home_r = np.asarray(robot.home, dtype=float)[:3, :3]
     a6 = home_r.T @ np.asarray(robot.axis_dirs, dtype=float)[5]
     p6 = home_r.T @ (np.asarray(robot.axis_points, dtype=float)[5] - robot.home[:3, 3])
-    ball = np.asarray(data.ball_mm, dtype=float)
+    balls = data.distinct_balls_mm
     if ball_offset is not None:
-        ball = ball + ball_offset.params()
+        balls = balls + ball_offset.params()
 
     # unknowns x: t (1), then home turn ω (3) and shift u (3) if geometry, ball v (3) if
-    # tool offset; the ball must not move: t a6×(b−p6) + ω×b + u + v = 0
-    lever = np.cross(a6, ball - p6)[:, None]
-    blocks, current, sigma = [lever], [_joint6_zero(model, data)], [JOINT_ZERO_SIGMA_RAD]
+    # tool offset; no ball may move: t a6×(b−p6) + ω×b + u + v = 0 for every ball b
+    rows, current, sigma = [], [_joint6_zero(model, data)], [JOINT_ZERO_SIGMA_RAD]
+    for ball in balls:
+        blocks = [np.cross(a6, ball - p6)[:, None]]
+        if geometry is not None:
+            blocks += [-_skew(ball), np.eye(3)]
+        if ball_offset is not None:
+            blocks.append(np.eye(3))
+        rows.append(np.hstack(blocks))
     if geometry is not None:
         errors = geometry.errors()
-        blocks += [-_skew(ball), np.eye(3)]
         current += [*(home_r.T @ errors[23:26]), *(home_r.T @ errors[20:23])]
         sigma += [HOME_TURN_SIGMA_RAD] * 3 + [HOME_SHIFT_SIGMA_MM] * 3
     if ball_offset is not None:
-        blocks.append(np.eye(3))
         current += list(ball_offset.params())
         sigma += [BALL_SIGMA_MM] * 3
-    constraint = np.hstack(blocks)
-    null = scipy.linalg.null_space(constraint)
+    constraint = np.vstack(rows)
     weight = 1.0 / np.asarray(sigma)
+    # only what moves a program's flange counts as unseen: the swap of joint 6's zero
+    # with tool0's turn about the same axis changes nothing anywhere
+    null = scipy.linalg.null_space(constraint)
+    if not np.any(np.abs(_flange_motion(null, geometry is not None, a6, p6)) > 1e-9):
+        return None
     z, *_ = np.linalg.lstsq(weight[:, None] * null, -weight * np.asarray(current), rcond=None)
     x = null @ z
 
@@ -149,7 +171,22 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
     if not np.isfinite(change) or change > MAX_POINT_CHANGE_MM:
         return None
     model.effects = trial.effects
-    return GaugeChange(float(x[0]), turn, shift, ball_move, change)
+    return GaugeChange(float(x[0]), turn, shift, ball_move, change, balls=len(balls))
+
+
+def _flange_motion(null: np.ndarray, geometry: bool, a6: np.ndarray,
+                   p6: np.ndarray) -> np.ndarray:
+    """How each null direction (columns) turns and shifts the flange (6, k): joint 6's
+    zero t and tool0's turn ω and shift u together, in the flange frame."""
+    if null.size == 0:
+        return np.zeros((6, 0))
+    t = null[0]
+    turn = np.outer(a6, t)
+    shift = -np.cross(a6, p6)[:, None] * t  # a turn about axis 6 moves the origin
+    if geometry:
+        turn = turn + null[1:4]
+        shift = shift + null[4:7]
+    return np.vstack([turn, shift])
 
 
 def _skew(v: np.ndarray) -> np.ndarray:

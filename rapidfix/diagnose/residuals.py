@@ -53,5 +53,5 @@ def residuals(model: ErrorModel, robot: Any, data: MeasuredPoints) -> Residuals:
         warnings.simplefilter("ignore", OutsideRangeWarning)
         world = model.geometry(robot, data.q, data.ctx).world
         measured = world_to_base(world, data.xyz)
-        predicted = model.predict_ball(robot, data.q, data.ball_mm, data.ctx)
+        predicted = model.predict_ball(robot, data.q, data.row_balls_mm, data.ctx)
     return Residuals(measured - predicted)

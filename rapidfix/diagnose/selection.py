@@ -158,7 +158,7 @@ def initial_frame(model: ErrorModel, robot: Any, cal: MeasuredPoints) -> Tracker
     """Tracker pose from a rigid fit of the model's predictions to the calibration points."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)
-        p = model.predict_ball(robot, cal.q, cal.ball_mm, cal.ctx)
+        p = model.predict_ball(robot, cal.q, cal.row_balls_mm, cal.ctx)
     R, t = rigid_fit(p, cal.xyz)
     return TrackerFrame.from_pose(R, t)
 

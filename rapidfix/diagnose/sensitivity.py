@@ -25,6 +25,6 @@ def joint_derivatives(model: ErrorModel, robot: Any, data: MeasuredPoints) -> np
         dq = np.zeros(6)
         dq[j] = h
         ctx = data.ctx if q_prev is None else data.ctx.with_q_prev(q_prev + dq)
-        moved = MeasuredPoints(data.q + dq, data.xyz, ctx, data.ball_mm)
+        moved = data.moved(data.q + dq, ctx)
         out[j] = (predict(model, robot, moved).ravel() - base) / h
     return out

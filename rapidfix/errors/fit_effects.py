@@ -31,15 +31,42 @@ _STEP_TOL_MM = 1e-5
 @dataclass(frozen=True)
 class MeasuredPoints:
     """Commanded joints q (N, 6) rad, measured ball centres xyz (N, 3) mm in the tracker
-    frame, the poses' context and the declared ball offset (3,) mm in the flange frame."""
+    frame, the poses' context and the declared ball offset (3,) mm in the flange frame.
+
+    `ball_mm` is the setup's first ball (nest 0: where a payload without its own
+    centre of gravity is taken to hang, and the sweeps' ball). `balls_mm` (N, 3), when
+    the flange carries several nests, is the ball each row measured; None: every row
+    measured `ball_mm`. Predictions use `row_balls_mm`.
+    """
 
     q: np.ndarray
     xyz: np.ndarray
     ctx: Context
     ball_mm: np.ndarray
+    balls_mm: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.q.shape[0])
+
+    @property
+    def row_balls_mm(self) -> np.ndarray:
+        """The ball each row measured: (N, 3) mm, or (3,) when every row measured one ball."""
+        return self.ball_mm if self.balls_mm is None else self.balls_mm
+
+    @property
+    def distinct_balls_mm(self) -> np.ndarray:
+        """The distinct balls (K, 3) mm the rows measured."""
+        return np.unique(np.atleast_2d(self.row_balls_mm), axis=0)
+
+    def take(self, index: np.ndarray | slice) -> MeasuredPoints:
+        """The subset of rows `index` (mask, indices or slice)."""
+        balls = None if self.balls_mm is None else self.balls_mm[index]
+        return MeasuredPoints(self.q[index], self.xyz[index], self.ctx.take(index),
+                              self.ball_mm, balls)
+
+    def moved(self, q: np.ndarray, ctx: Context) -> MeasuredPoints:
+        """The same measurements taken at other commanded joints and context."""
+        return MeasuredPoints(q, self.xyz, ctx, self.ball_mm, self.balls_mm)
 
 
 @dataclass(frozen=True)
@@ -60,7 +87,7 @@ class EffectsFit:
 
 def predict(model: ErrorModel, robot: object, data: MeasuredPoints) -> np.ndarray:
     """Predicted tracker-frame ball centres (N, 3) mm."""
-    return model.predict_ball(robot, data.q, data.ball_mm, data.ctx, frame="world")
+    return model.predict_ball(robot, data.q, data.row_balls_mm, data.ctx, frame="world")
 
 
 def _steps(model: ErrorModel, p: np.ndarray) -> np.ndarray:

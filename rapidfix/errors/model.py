@@ -33,9 +33,14 @@ def _joints(q: np.ndarray) -> np.ndarray:
 
 
 def _point_tool(offset_mm: np.ndarray | None) -> np.ndarray:
-    tool = np.eye(4)
-    if offset_mm is not None:
-        tool[:3, 3] = np.asarray(offset_mm, dtype=float)
+    """A pure translation (4, 4) for one offset (3,), or (N, 4, 4) for per-row offsets (N, 3)."""
+    if offset_mm is None:
+        return np.eye(4)
+    offset = np.asarray(offset_mm, dtype=float)
+    if offset.shape[-1:] != (3,) or offset.ndim > 2:
+        raise ModelError(f"ball offsets must have shape (3,) or (N, 3), got {offset.shape}")
+    tool = np.broadcast_to(np.eye(4), (*offset.shape[:-1], 4, 4)).copy()
+    tool[..., :3, 3] = offset
     return tool
 
 
@@ -211,7 +216,11 @@ class ErrorModel:
         *,
         frame: str = "base",
     ) -> np.ndarray:
-        """Target-ball centres (N, 3) mm: in the robot base frame, or frame="world" (tracker)."""
+        """Target-ball centres (N, 3) mm: in the robot base frame, or frame="world" (tracker).
+
+        `ball_offset_mm` is one ball (3,) for every row, or each row's own ball (N, 3)
+        (a flange with several nests, each row measured on one of them).
+        """
         tcp, _ = self.actual_tcp(robot, q_cmd, ctx, _point_tool(ball_offset_mm))
         if frame == "base":
             return tcp[:, :3, 3]

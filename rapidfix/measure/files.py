@@ -6,10 +6,15 @@ header separated by semicolons or tabs sets the delimiter (then `,` is also read
 decimal mark), and lines starting with `#` are comments:
 
 - sweeps:  ``sweep_joint,j1,j2,j3,j4,j5,j6,repeat,x,y,z``
-- points:  ``point_id,j1,j2,j3,j4,j5,j6,x,y,z``
+- points:  ``point_id,j1,j2,j3,j4,j5,j6,x,y,z``, optional ``ball`` (the target-ball
+  nest each row measured, an index into the setup's `smr_offsets_mm`, default 0)
 - optional in either: ``payload_kg``, ``time_s``, ``temp_c``; further numeric
   columns are kept in ``extra`` (e.g. ``length_mm`` of a ballbar run); further text
   columns (notes, time stamps) are ignored with a warning.
+
+The setup declares one ball (``smr_offset_mm = [x, y, z]``) or several nests on the
+flange (``smr_offsets_mm = [[x, y, z], ...]``): one ball shows where the flange is,
+not how it turns about that ball; two or more show its orientation too.
 
 Joints are degrees in the files and radians in the tables; positions are mm.
 Every problem a user can cause raises `MeasurementError` naming the file and,
@@ -45,6 +50,10 @@ JOINT_COLUMNS = ("j1", "j2", "j3", "j4", "j5", "j6")
 XYZ_COLUMNS = ("x", "y", "z")
 SWEEP_COLUMNS = ("sweep_joint", *JOINT_COLUMNS, "repeat", *XYZ_COLUMNS)
 POINT_COLUMNS = ("point_id", *JOINT_COLUMNS, *XYZ_COLUMNS)
+#: optional column of a points table: the nest (index into `Setup.ball_offsets_mm`)
+BALL_COLUMN = "ball"
+#: at most this many nests on one flange
+MAX_BALLS = 16
 CONDITION_COLUMNS = ("payload_kg", "time_s", "temp_c")
 
 #: A measured position table whose every |x|, |y|, |z| stays below this (mm) was
@@ -62,6 +71,8 @@ REACH_FACTOR = 10.0
 DEFAULT_REACH_MM = 5000.0
 #: the farthest a target ball may sit from the flange (mm)
 MAX_SMR_OFFSET_MM = 5000.0
+#: two nests closer than this (mm) are one nest written twice (an SMR is 12.7–38 mm across)
+MIN_NEST_GAP_MM = 5.0
 #: physical ranges of the condition columns (kg, s, °C)
 CONDITION_BOUNDS = {"payload_kg": (0.0, 1e4), "time_s": (-1e9, 1e9), "temp_c": (-273.15, 1e3)}
 
@@ -70,7 +81,9 @@ CONDITION_BOUNDS = {"payload_kg": (0.0, 1e4), "time_s": (-1e9, 1e9), "temp_c": (
 class Setup:
     """The cell as `setup.toml` declares it.
 
-    `smr_offset_mm` is the target-ball centre in the flange (tool0) frame;
+    `smr_offset_mm` is the target-ball centre in the flange (tool0) frame (nest 0,
+    the one the sweeps use); `smr_offsets_mm` (K, 3), when the flange carries K ≥ 2
+    nests, every nest's centre (row 0 = `smr_offset_mm`), None for one ball;
     `tracker_sigma_mm` the tracker's stated noise (None when not stated);
     `payload_kg` the default payload of rows without a payload column.
     """
@@ -81,6 +94,22 @@ class Setup:
     payload_kg: float = 0.0
     path: Path | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
+    smr_offsets_mm: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.smr_offsets_mm is None:
+            return
+        nests = np.asarray(self.smr_offsets_mm, dtype=float).reshape(-1, 3)
+        if not np.allclose(nests[0], self.smr_offset_mm, rtol=0.0, atol=1e-9):
+            raise ValueError("smr_offsets_mm[0] must be smr_offset_mm (nest 0)")
+        object.__setattr__(self, "smr_offsets_mm", nests)
+
+    @property
+    def ball_offsets_mm(self) -> np.ndarray:
+        """Every nest's ball centre (K, 3) mm in the flange frame (K = 1 for one ball)."""
+        if self.smr_offsets_mm is None:
+            return np.asarray(self.smr_offset_mm, dtype=float).reshape(1, 3)
+        return self.smr_offsets_mm
 
 
 @dataclass(frozen=True)
@@ -109,7 +138,11 @@ class SweepTable:
 
 @dataclass(frozen=True)
 class PointTable:
-    """A points CSV (calibration, validation, ballbar) as arrays; see `SweepTable`."""
+    """A points CSV (calibration, validation, ballbar) as arrays; see `SweepTable`.
+
+    `ball` (N,) int is the nest each row measured (None: the file has no `ball`
+    column, every row is nest 0); `ball_offsets` turns it into offsets.
+    """
 
     point_id: np.ndarray
     q: np.ndarray
@@ -120,6 +153,7 @@ class PointTable:
     temp_c: np.ndarray | None = None
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
     path: Path | None = None
+    ball: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -129,7 +163,7 @@ class PointTable:
 
 
 #: the keys setup.toml may hold; any other is reported and ignored
-SETUP_KEYS = ("robot", "smr_offset_mm", "tracker_sigma_mm", "payload_kg")
+SETUP_KEYS = ("robot", "smr_offset_mm", "smr_offsets_mm", "tracker_sigma_mm", "payload_kg")
 
 
 class MeasurementWarning(RapidfixWarning):
@@ -181,26 +215,28 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
             raise fail("robot", err.message if repr(robot) in err.message
                        else f"unknown robot {robot!r}: {err.message}") from None
 
-    smr = data.get("smr_offset_mm")
-    if (
-        not isinstance(smr, list)
-        or len(smr) != 3
-        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in smr)
-    ):
-        raise fail("smr_offset_mm", "'smr_offset_mm' must be three numbers [x, y, z] in mm")
-    try:
-        smr_arr = np.asarray(smr, dtype=float)
-    except OverflowError:
-        raise fail("smr_offset_mm", "'smr_offset_mm' must be finite") from None
-    if not np.all(np.isfinite(smr_arr)):
-        raise fail("smr_offset_mm", "'smr_offset_mm' must be finite")
-    norm = float(np.linalg.norm(smr_arr))
-    if norm > MAX_SMR_OFFSET_MM:
-        raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} mm long: no target ball "
-                   f"sits more than {MAX_SMR_OFFSET_MM:g} mm from the flange")
-    if 0.0 < norm < 1.0:
-        raise fail("smr_offset_mm", f"'smr_offset_mm' is {norm:.4g} long: "
-                   "this looks like metres, the file needs mm")
+    if "smr_offset_mm" in data and "smr_offsets_mm" in data:
+        raise fail("smr_offsets_mm", "give either 'smr_offset_mm' (one ball) or "
+                   "'smr_offsets_mm' (several nests), not both")
+    nests = None
+    if "smr_offsets_mm" in data:
+        value = data["smr_offsets_mm"]
+        if (not isinstance(value, list) or not 1 <= len(value) <= MAX_BALLS
+                or not all(isinstance(v, list) for v in value)):
+            raise fail("smr_offsets_mm", "'smr_offsets_mm' must be a list of 1 to "
+                       f"{MAX_BALLS} offsets [[x, y, z], ...] in mm")
+        nests = np.vstack([_ball_offset(v, f"smr_offsets_mm[{k}]", "smr_offsets_mm", fail)
+                           for k, v in enumerate(value)])
+        gap = np.linalg.norm(nests[:, None] - nests[None], axis=-1) + 1e9 * np.eye(len(nests))
+        if np.any(gap < MIN_NEST_GAP_MM):
+            a, b = np.argwhere(gap < MIN_NEST_GAP_MM)[0]
+            raise fail("smr_offsets_mm", f"nests {a} and {b} of 'smr_offsets_mm' are "
+                       f"{gap[a, b]:.3g} mm apart: two nests must be at least "
+                       f"{MIN_NEST_GAP_MM:g} mm apart")
+        smr_arr = nests[0]
+    else:
+        smr_arr = _ball_offset(data.get("smr_offset_mm"), "smr_offset_mm", "smr_offset_mm",
+                               fail)
 
     sigma = _positive_number(data, "tracker_sigma_mm", fail, optional=True)
     if sigma is not None and sigma >= 1.0:
@@ -215,7 +251,32 @@ def read_setup(path: str | Path, *, check_robot: bool = True) -> Setup:
         warnings.warn(f"{path}{f':{where}' if where else ''}: unknown key {key!r} ignored "
                       f"(known: {', '.join(SETUP_KEYS)})", MeasurementWarning, stacklevel=2)
     return Setup(robot=robot, smr_offset_mm=smr_arr, tracker_sigma_mm=sigma,
-                 payload_kg=0.0 if payload is None else payload, path=path, extra=extra)
+                 payload_kg=0.0 if payload is None else payload, path=path, extra=extra,
+                 smr_offsets_mm=nests if nests is not None and len(nests) > 1 else None)
+
+
+def _ball_offset(value: Any, name: str, key: str, fail: Any) -> np.ndarray:
+    """One ball offset [x, y, z] mm from the setup, checked (`name` for the message)."""
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    ):
+        raise fail(key, f"'{name}' must be three numbers [x, y, z] in mm")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except OverflowError:
+        raise fail(key, f"'{name}' must be finite") from None
+    if not np.all(np.isfinite(arr)):
+        raise fail(key, f"'{name}' must be finite")
+    norm = float(np.linalg.norm(arr))
+    if norm > MAX_SMR_OFFSET_MM:
+        raise fail(key, f"'{name}' is {norm:.4g} mm long: no target ball "
+                   f"sits more than {MAX_SMR_OFFSET_MM:g} mm from the flange")
+    if 0.0 < norm < 1.0:
+        raise fail(key, f"'{name}' is {norm:.4g} long: "
+                   "this looks like metres, the file needs mm")
+    return arr
 
 
 def _positive_number(data: Mapping[str, Any], key: str, fail: Any, *, optional: bool,
@@ -233,8 +294,13 @@ def _positive_number(data: Mapping[str, Any], key: str, fail: Any, *, optional: 
 
 def write_setup(path: str | Path, setup: Setup) -> Path:
     """Write `setup` as `setup.toml` (atomically); extra keys must be plain scalars/lists."""
-    lines = [f'robot = "{setup.robot}"',
-             "smr_offset_mm = [" + ", ".join(f"{v:.6f}" for v in setup.smr_offset_mm) + "]"]
+    lines = [f'robot = "{setup.robot}"']
+    nests = setup.ball_offsets_mm
+    if len(nests) == 1:
+        lines.append("smr_offset_mm = [" + ", ".join(f"{v:.6f}" for v in nests[0]) + "]")
+    else:
+        lines.append("smr_offsets_mm = [" + ", ".join(
+            "[" + ", ".join(f"{v:.6f}" for v in row) + "]" for row in nests) + "]")
     if setup.tracker_sigma_mm is not None:
         lines.append(f"tracker_sigma_mm = {setup.tracker_sigma_mm:.6g}")
     lines.append(f"payload_kg = {float(setup.payload_kg):.6g}")
@@ -455,6 +521,14 @@ def read_sweeps(path: str | Path, *, reach_mm: float | None = None) -> SweepTabl
     """
     raw = _read_raw(Path(path), SWEEP_COLUMNS)
     joint = _integers(raw, "sweep_joint", 1, 6) - 1
+    if BALL_COLUMN in raw.header:
+        nest = _numbers(raw, BALL_COLUMN)
+        if np.any(nest != 0):
+            i = int(np.argmax(nest != 0))
+            raise MeasurementError(
+                f"{raw.column(BALL_COLUMN)[i]!r}: sweeps are analysed on ball 0 only "
+                "(smr_offset_mm or the first of smr_offsets_mm)", file=raw.path,
+                row=int(raw.rows[i]), column=BALL_COLUMN)
     q_deg = np.column_stack([_numbers(raw, c) for c in JOINT_COLUMNS])
     repeat = _integers(raw, "repeat", 0, None)
     xyz = np.column_stack([_numbers(raw, c) for c in XYZ_COLUMNS])
@@ -487,13 +561,37 @@ def read_points(path: str | Path, *, reach_mm: float | None = None) -> PointTabl
                                row=int(raw.rows[i]), column="point_id")
     q_deg = np.column_stack([_numbers(raw, c) for c in JOINT_COLUMNS])
     xyz = np.column_stack([_numbers(raw, c) for c in XYZ_COLUMNS])
-    conditions, extra = _optional_columns(raw, POINT_COLUMNS)
+    nest = (_integers(raw, BALL_COLUMN, 0, MAX_BALLS - 1) if BALL_COLUMN in raw.header
+            else None)
+    conditions, extra = _optional_columns(raw, (*POINT_COLUMNS, BALL_COLUMN))
     _check_bounds(raw, q_deg, xyz, reach_mm)
     _check_units(raw, q_deg, xyz)
     stacked = [q_deg, xyz] + [v[:, None] for v in conditions.values() if v is not None]
+    if nest is not None:
+        stacked.append(nest[:, None])
     _check_duplicates(raw, np.hstack(stacked))
     return PointTable(point_id=ids.astype(str), q=np.radians(q_deg), xyz=xyz, rows=raw.rows,
-                      extra=extra, path=raw.path, **conditions)
+                      extra=extra, path=raw.path, ball=nest, **conditions)
+
+
+def ball_offsets(table: PointTable, setup: Setup) -> np.ndarray:
+    """Each row's ball centre (N, 3) mm in the flange frame: the nest its `ball` column
+    names (nest 0 without the column). A nest the setup does not declare is a
+    MeasurementError naming the table's file, row and column."""
+    nests = setup.ball_offsets_mm
+    if table.ball is None:
+        return np.broadcast_to(nests[0], (len(table), 3)).copy()
+    index = np.asarray(table.ball, dtype=int)
+    bad = (index < 0) | (index >= len(nests))
+    if bad.any():
+        i = int(np.argmax(bad))
+        where = f" ({setup.path.name})" if setup.path is not None else ""
+        declared = ("only one ball (smr_offset_mm), nest 0" if len(nests) == 1
+                    else f"nests 0..{len(nests) - 1} (smr_offsets_mm)")
+        raise MeasurementError(f"ball {int(index[i])} has no offset: the setup{where} "
+                               f"declares {declared}", file=table.path,
+                               row=int(table.rows[i]), column=BALL_COLUMN)
+    return nests[index]
 
 
 _FORMATS = {"q": "%.6f", "xyz": "%.4f", "payload_kg": "%.3f", "time_s": "%.3f",
@@ -535,6 +633,8 @@ def write_points(path: str | Path, table: PointTable) -> Path:
     columns = [("point_id", np.asarray(table.point_id, dtype=str), "%s")]
     columns += [(c, q_deg[:, i], _FORMATS["q"]) for i, c in enumerate(JOINT_COLUMNS)]
     columns += [(c, table.xyz[:, i], _FORMATS["xyz"]) for i, c in enumerate(XYZ_COLUMNS)]
+    if table.ball is not None:
+        columns.append((BALL_COLUMN, np.asarray(table.ball, dtype=int), "%d"))
     return write_text_atomic(path, _render(columns + _condition_columns(table)))
 
 

@@ -114,6 +114,12 @@ class RewriteOptions:
         if self.temperature_c is not None and not -50.0 <= self.temperature_c <= 150.0:
             raise InvalidOption("temperature_c", f"{self.temperature_c:g} °C is not a cell "
                                 "temperature (give degrees Celsius, -50 to 150)")
+        if self.approach and self.emit != "jointtargets":
+            # an approach point fixes the side each joint arrives from; a robtarget leaves
+            # the joints to the controller's inverse kinematics, so it cannot
+            raise InvalidOption("approach", f"needs emit 'jointtargets' (not {self.emit!r}): "
+                                "approach points are joint positions, and a robtarget "
+                                "leaves the joints to the controller")
 
 
 

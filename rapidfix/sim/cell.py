@@ -41,6 +41,7 @@ from rapidfix.sim.plans import BallbarPlan, ballbar_plan, point_plan, sweep_plan
 from rapidfix.sim.virtual_robot import (
     DEFAULT_ROBOT,
     DEFAULT_SMR_OFFSET_MM,
+    SECOND_SMR_OFFSET_MM,
     RunConditions,
     VirtualRobot,
 )
@@ -89,14 +90,20 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
                  n_outliers: int = 0, payload_kg: float = 0.0,
                  smr_offset_mm: tuple[float, float, float] = DEFAULT_SMR_OFFSET_MM,
                  sweep_joints: tuple[int, ...] = (0, 1, 2, 3, 4, 5),
-                 seconds_per_row: float = 3.0) -> SimulatedSet:
+                 seconds_per_row: float = 3.0, balls: int = 2,
+                 smr_offsets_mm: Any = None) -> SimulatedSet:
     """Simulate one session on a new virtual robot drawn from `seed` (see module doc).
 
     `effects` names optional true effects (rapidfix.sim.true_errors.EFFECTS);
     `n_outliers` sweep rows get a gross tracker error (0.3–2 mm), listed in the truth.
+    The calibration and validation points are measured on `balls` nests taken in turn,
+    row by row (`ball` column): `smr_offset_mm` then SECOND_SMR_OFFSET_MM, or the
+    nests `smr_offsets_mm` (K, 3) given; the sweeps and the ballbar use nest 0.
+    `balls=1` measures every point on one ball, as before.
     """
-    vr = VirtualRobot.create(robot, seed=seed, effects=effects, smr_offset_mm=smr_offset_mm,
-                             payload_kg=payload_kg)
+    nests = _nests(smr_offset_mm, smr_offsets_mm, balls)
+    vr = VirtualRobot.create(robot, seed=seed, effects=effects, smr_offset_mm=nests[0],
+                             payload_kg=payload_kg, smr_offsets_mm=nests)
     model = vr.robot
     # One independent stream per purpose, so switching an effect on or off changes
     # nothing else in the session (same poses, same noise).
@@ -128,7 +135,11 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
     time = np.arange(n_all) * seconds_per_row
     temp = vr.errors.temperature(time) if thermal else None
     ctx = _conditions(payload, time, temp, q_all, None)
-    xyz = vr.measure(q_all, ctx, frame="tracker", seed=int(noise_ss.generate_state(1)[0]))
+    # calibration and validation points turn through the nests, row by row
+    nest = np.concatenate([np.zeros(sizes[0], dtype=int), np.arange(sizes[1]) % len(nests),
+                           np.arange(sizes[2]) % len(nests), np.zeros(sizes[3], dtype=int)])
+    xyz = vr.measure(q_all, ctx, frame="tracker", seed=int(noise_ss.generate_state(1)[0]),
+                     ball=nest)
 
     outlier_rows: list[int] = []
     if n_outliers > sizes[0]:
@@ -154,16 +165,19 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
 
     setup = Setup(robot=model.name, smr_offset_mm=smr.copy(),
                   tracker_sigma_mm=vr.tracker.sigma0_mm + 3.0 * vr.tracker.sigma_per_m_mm,
-                  payload_kg=payload_kg)
+                  payload_kg=payload_kg,
+                  smr_offsets_mm=nests.copy() if len(nests) > 1 else None)
     s = parts[0]
     sweep_table = SweepTable(sweep_joint=sweeps.sweep_joint, q=q_all[s], repeat=sweeps.repeat,
                              xyz=xyz[s], rows=np.arange(sizes[0]) + 2, **cond(s))
 
-    def points(part: slice, prefix: str, extra: dict | None = None) -> PointTable:
+    def points(part: slice, prefix: str, extra: dict | None = None,
+               with_nest: bool = False) -> PointTable:
         n = part.stop - part.start
         ids = np.array([f"{prefix}{i + 1:03d}" for i in range(n)])
         return PointTable(point_id=ids, q=q_all[part], xyz=xyz[part], rows=np.arange(n) + 2,
-                          extra=extra or {}, **cond(part))
+                          extra=extra or {}, ball=nest[part] if with_nest else None,
+                          **cond(part))
 
     bb_ctx = RunConditions(**{k: (None if v is None else v[parts[3]])
                               for k, v in vars(ctx).items()})
@@ -179,14 +193,34 @@ def simulate_set(seed: int = 0, effects: tuple[str, ...] | list[str] = (),
                           "tracker pose", "joint1_error_at_zero_deg": float(np.degrees(c)),
                   "R": R_g.tolist(), "t_mm": t_g.tolist()},
         "outlier_rows": {"sweeps.csv": outlier_rows},
-        "noise_floor": vr.noise_floor(q_all[parts[2]], val_ctx, seed=seed),
+        "noise_floor": vr.noise_floor(q_all[parts[2]], val_ctx, seed=seed,
+                                      ball=nest[parts[2]] if len(nests) > 1 else None),
         "session": {"seconds_per_row": seconds_per_row, "order": [*FILES[1:4], "ballbar.csv"],
                     "rows": sizes},
     })
+    multi = len(nests) > 1
     return SimulatedSet(setup=setup, sweeps=sweep_table,
-                        calibration=points(parts[1], "C"), validation=points(parts[2], "V"),
+                        calibration=points(parts[1], "C", with_nest=multi),
+                        validation=points(parts[2], "V", with_nest=multi),
                         ballbar=bb, ballbar_points=points(parts[3], "B", {"length_mm": lengths}),
                         robot=vr, truth=truth)
+
+
+def _nests(first: Any, given: Any, balls: int) -> np.ndarray:
+    """The nests (K, 3) mm a session measures on (see `simulate_set`)."""
+    if given is not None:
+        nests = np.asarray(given, dtype=float).reshape(-1, 3)
+    else:
+        nests = np.vstack([np.asarray(first, dtype=float), SECOND_SMR_OFFSET_MM])
+    if not 1 <= balls <= len(nests):
+        raise RapidfixError(f"{balls} balls asked for, {len(nests)} nests declared",
+                            hint="measure on 1 or 2 balls")
+    nests = nests[:balls]
+    gap = np.linalg.norm(nests[:, None] - nests[None], axis=-1) + 1e9 * np.eye(len(nests))
+    if gap.min() < 5.0:
+        raise RapidfixError("two nests of the simulated flange coincide",
+                            hint="give nests at least 5 mm apart")
+    return nests
 
 
 def write_set(out_dir: str | Path, data: SimulatedSet, *, overwrite: bool = False) -> Path:

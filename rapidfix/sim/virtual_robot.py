@@ -7,6 +7,10 @@ conditions each row ran under — any object or mapping with the optional fields
 `payload_kg`, `time_s`, `temp_c` (N,) and `q_prev` (N, 6) rad (the pose before
 each row; without it the rows are taken as executed in order). This is the same
 shape as `rapidfix.errors.context.Context`, which is accepted as is.
+
+The flange may carry several target-ball nests (`smr_offsets_mm`, nest 0 first):
+`measure(..., ball=index)` measures each row on its own nest. A payload without its
+own centre of gravity hangs at nest 0.
 """
 
 from __future__ import annotations
@@ -31,6 +35,11 @@ from rapidfix.sim.true_errors import (
 DEFAULT_ROBOT = "IRB1600-10/1.45"
 #: Target ball in the flange frame, mm: 100 mm off the joint-6 axis so joint 6 draws a circle.
 DEFAULT_SMR_OFFSET_MM = (60.0, 80.0, 90.0)
+#: A second nest on the other side of the flange, also 100 mm off its axis: one ball
+#: cannot show how the flange turns about it, two leave only the turn about the line
+#: through both unseen, and this line crosses the flange axis 120 mm out, where tools are.
+SECOND_SMR_OFFSET_MM = (-60.0, -80.0, 150.0)
+DEFAULT_SMR_OFFSETS_MM = (DEFAULT_SMR_OFFSET_MM, SECOND_SMR_OFFSET_MM)
 #: Joint repeatability (1σ, rad): about ±0.01–0.03 mm at the TCP of a 1.45 m arm.
 DEFAULT_REPEATABILITY_RAD = 1.0e-5
 
@@ -76,11 +85,18 @@ class VirtualRobot:
 
     def __init__(self, robot: RobotModel, errors: TrueErrors, tracker: VirtualTracker,
                  smr_offset_mm: np.ndarray, *, payload_kg: float = 0.0,
-                 repeatability_rad: float = DEFAULT_REPEATABILITY_RAD, seed: int = 0) -> None:
+                 repeatability_rad: float = DEFAULT_REPEATABILITY_RAD, seed: int = 0,
+                 smr_offsets_mm: np.ndarray | None = None) -> None:
         self.robot = robot
         self.errors = errors
         self.tracker = tracker
         self.smr_offset_mm = np.asarray(smr_offset_mm, dtype=float)
+        nests = (self.smr_offset_mm[None] if smr_offsets_mm is None
+                 else np.asarray(smr_offsets_mm, dtype=float).reshape(-1, 3))
+        if not np.allclose(nests[0], self.smr_offset_mm):
+            raise ValueError("the first of smr_offsets_mm must be smr_offset_mm")
+        #: every nest's declared ball centre (K, 3) mm in the flange frame
+        self.smr_offsets_mm = nests
         self.payload_kg = float(payload_kg)
         self.repeatability_rad = float(repeatability_rad)
         self.seed = int(seed)
@@ -96,14 +112,18 @@ class VirtualRobot:
                effects: tuple[str, ...] | list[str] = (),
                smr_offset_mm: tuple[float, float, float] | np.ndarray = DEFAULT_SMR_OFFSET_MM,
                payload_kg: float = 0.0,
-               repeatability_rad: float = DEFAULT_REPEATABILITY_RAD) -> VirtualRobot:
-        """A robot with random true errors (per-joint always, plus `effects`) and tracker."""
+               repeatability_rad: float = DEFAULT_REPEATABILITY_RAD,
+               smr_offsets_mm: Any = None) -> VirtualRobot:
+        """A robot with random true errors (per-joint always, plus `effects`) and tracker;
+        `smr_offsets_mm` (K, 3) its nests (default: `smr_offset_mm` alone)."""
         model = load_robot(robot) if isinstance(robot, str) else robot
         rng = np.random.default_rng(seed)
         errors = TrueErrors.draw(model, tuple(effects), rng)
         tracker = VirtualTracker.place(rng, scale_ppm=errors.scale_ppm)
-        return cls(model, errors, tracker, np.asarray(smr_offset_mm, dtype=float),
-                   payload_kg=payload_kg, repeatability_rad=repeatability_rad, seed=seed)
+        nests = None if smr_offsets_mm is None else np.asarray(smr_offsets_mm, dtype=float)
+        first = np.asarray(smr_offset_mm, dtype=float) if nests is None else nests[0]
+        return cls(model, errors, tracker, first, payload_kg=payload_kg,
+                   repeatability_rad=repeatability_rad, seed=seed, smr_offsets_mm=nests)
 
     # ---- the true robot --------------------------------------------------------------
 
@@ -113,6 +133,24 @@ class VirtualRobot:
         if self.errors.tool_offset is None:
             return self.smr_offset_mm
         return self.smr_offset_mm + self.errors.tool_offset
+
+    @property
+    def true_smr_offsets_mm(self) -> np.ndarray:
+        """Where every nest's ball really is (K, 3) mm: the plate carrying them sits off
+        by the tool offset error."""
+        if self.errors.tool_offset is None:
+            return self.smr_offsets_mm
+        return self.smr_offsets_mm + self.errors.tool_offset
+
+    def _nest(self, ball: Any, n: int, true: bool = True) -> np.ndarray:
+        """Ball centres (N, 3) (or (3,) for nest 0 everywhere) of per-row nest indices."""
+        nests = self.true_smr_offsets_mm if true else self.smr_offsets_mm
+        if ball is None:
+            return nests[0]
+        index = np.broadcast_to(np.asarray(ball, dtype=int), (n,))
+        if index.min() < 0 or index.max() >= len(nests):
+            raise ValueError(f"ball index outside 0..{len(nests) - 1}")
+        return nests[index]
 
     def temperature(self, ctx: Any, n: int) -> np.ndarray | None:
         """Arm temperature per row: the context's temp_c, else from time_s, else None."""
@@ -180,18 +218,23 @@ class VirtualRobot:
                                                       masses)
         return out
 
-    def _ball(self, q_act: np.ndarray, scale: np.ndarray | float) -> np.ndarray:
+    def _ball(self, q_act: np.ndarray, scale: np.ndarray | float,
+              ball: Any = None) -> np.ndarray:
         T = self.actual_model.fk(q_act)
-        return T[:, :3, :3] @ self.true_smr_offset_mm + np.reshape(scale, (-1, 1)) * T[:, :3, 3]
+        local = np.broadcast_to(self._nest(ball, len(q_act)), (len(q_act), 3))
+        return (np.einsum("nij,nj->ni", T[:, :3, :3], local)
+                + np.reshape(scale, (-1, 1)) * T[:, :3, 3])
 
-    def _positions(self, q_cmd: np.ndarray, ctx: Any, jitter: np.ndarray | None) -> np.ndarray:
+    def _positions(self, q_cmd: np.ndarray, ctx: Any, jitter: np.ndarray | None,
+                   ball: Any = None) -> np.ndarray:
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         scale = self.errors.thermal_scale(self.temperature(ctx, len(q)))
         q_act = self.actual_joints(q, ctx, jitter)
         if not self._moves_frames:
-            return self._ball(q_act, scale)
+            return self._ball(q_act, scale, ball)
         T = self._flange(q_act, ctx, scale)
-        return T[:, :3, :3] @ self.true_smr_offset_mm + T[:, :3, 3]
+        local = np.broadcast_to(self._nest(ball, len(q_act)), (len(q_act), 3))
+        return np.einsum("nij,nj->ni", T[:, :3, :3], local) + T[:, :3, 3]
 
     # ---- issue #14: effects on frames (tool, base, link) -----------------------------
 
@@ -240,30 +283,35 @@ class VirtualRobot:
         T = self._flange(self.actual_joints(q, ctx, jitter), ctx, scale)
         return T @ np.asarray(tool, dtype=float)
 
-    def ball_positions(self, q_cmd: np.ndarray, ctx: Any = None) -> np.ndarray:
-        """Noise-free true ball centres (N, 3) mm in the robot base frame."""
-        return self._positions(q_cmd, ctx, None)
+    def ball_positions(self, q_cmd: np.ndarray, ctx: Any = None, *,
+                       ball: Any = None) -> np.ndarray:
+        """Noise-free true ball centres (N, 3) mm in the robot base frame (`ball`: each
+        row's nest index, default nest 0)."""
+        return self._positions(q_cmd, ctx, None, ball)
 
-    def ideal_positions(self, q_cmd: np.ndarray) -> np.ndarray:
+    def ideal_positions(self, q_cmd: np.ndarray, *, ball: Any = None) -> np.ndarray:
         """Where a perfect robot would put the declared ball: nominal FK, mm, base frame."""
         T = self.robot.fk(np.atleast_2d(np.asarray(q_cmd, dtype=float)))
-        return T[:, :3, :3] @ self.smr_offset_mm + T[:, :3, 3]
+        local = np.broadcast_to(self._nest(ball, len(T), true=False), (len(T), 3))
+        return np.einsum("nij,nj->ni", T[:, :3, :3], local) + T[:, :3, 3]
 
     def measure(self, q_cmd: np.ndarray, ctx: Any = None, *, noise: bool = True,
-                frame: str = "base", seed: int | None = None) -> np.ndarray:
+                frame: str = "base", seed: int | None = None,
+                ball: Any = None) -> np.ndarray:
         """Execute q_cmd (N, 6) rad and measure the ball (N, 3) mm.
 
         `frame="base"`: in the robot base frame (a perfectly registered tracker);
         `frame="tracker"`: as the tracker reports it (its pose and scale error).
         With `noise`, each row gets joint-repeatability jitter and tracker noise;
         `seed` makes one call reproducible, else the robot's own stream is used.
+        `ball` (N,) or scalar: the nest each row measures (default nest 0).
         """
         if frame not in ("base", "tracker"):
             raise ValueError("frame must be 'base' or 'tracker'")
         q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
         rng = self._rng if seed is None else np.random.default_rng(seed)
         jitter = rng.normal(0.0, self.repeatability_rad, q.shape) if noise else None
-        p = self._positions(q, ctx, jitter)
+        p = self._positions(q, ctx, jitter, ball)
         sigma = self.tracker.sigma_mm(p)
         out = self.tracker.to_tracker(p) if frame == "tracker" else p
         if noise:
@@ -283,7 +331,7 @@ class VirtualRobot:
     # ---- what the truth file states --------------------------------------------------
 
     def noise_floor(self, q_cmd: np.ndarray, ctx: Any = None, *, draws: int = 200,
-                    seed: int = 0) -> dict[str, float]:
+                    seed: int = 0, ball: Any = None) -> dict[str, float]:
         """Expected mean TCP distance error from noise and repeatability alone, mm.
 
         Monte Carlo over `draws` repeats of the poses: a perfectly compensated robot,
@@ -303,9 +351,11 @@ class VirtualRobot:
             fields["q_prev"] = None if q_prev is None else np.tile(np.atleast_2d(q_prev),
                                                                    (draws, 1))
             big_ctx = RunConditions(**fields)
-        exact = self._positions(qq, big_ctx, None)
+        balls = None if ball is None else np.tile(
+            np.broadcast_to(np.asarray(ball, dtype=int), (len(q),)), draws)
+        exact = self._positions(qq, big_ctx, None, balls)
         jittered = self._positions(qq, big_ctx,
-                                   rng.normal(0.0, self.repeatability_rad, qq.shape))
+                                   rng.normal(0.0, self.repeatability_rad, qq.shape), balls)
         tracker = rng.normal(size=exact.shape) * self.tracker.sigma_mm(exact)[:, None]
         return {
             "mean_tcp_error_mm": float(np.mean(np.linalg.norm(jittered + tracker - exact,
@@ -317,9 +367,12 @@ class VirtualRobot:
 
     def truth(self) -> dict[str, Any]:
         """JSON data of everything true about this robot (see `from_truth`)."""
+        nests = {} if len(self.smr_offsets_mm) == 1 else {
+            "declared_smr_offsets_mm": self.smr_offsets_mm.tolist(),
+            "true_smr_offsets_mm": self.true_smr_offsets_mm.tolist()}
         return {"robot": self.robot.name, "seed": self.seed,
                 "declared_smr_offset_mm": self.smr_offset_mm.tolist(),
-                "true_smr_offset_mm": self.true_smr_offset_mm.tolist(),
+                "true_smr_offset_mm": self.true_smr_offset_mm.tolist(), **nests,
                 "payload_kg": self.payload_kg,
                 "repeatability_rad": self.repeatability_rad,
                 "errors": self.errors.to_dict(), "tracker": self.tracker.to_dict()}
@@ -332,7 +385,8 @@ class VirtualRobot:
                    np.asarray(truth["declared_smr_offset_mm"], dtype=float),
                    payload_kg=float(truth.get("payload_kg", 0.0)),
                    repeatability_rad=float(truth["repeatability_rad"]),
-                   seed=int(truth.get("seed", 0)))
+                   seed=int(truth.get("seed", 0)),
+                   smr_offsets_mm=truth.get("declared_smr_offsets_mm"))
 
     def true_joint_error(self, q_cmd: np.ndarray, ctx: Any = None) -> np.ndarray:
         """Δθ = θ_actual − θ_cmd (N, 6) rad, noise-free, in the simulator's own gauge."""

@@ -13,6 +13,7 @@ from rapidfix.measure.files import (
     PointTable,
     Setup,
     SweepTable,
+    ball_offsets,
     read_points,
     read_setup,
     read_sweeps,
@@ -227,6 +228,93 @@ def test_setup_round_trip(tmp_path):
     assert back.robot == setup.robot and back.smr_offset_mm.tolist() == [1.5, -2.0, 100.25]
     assert (back.tracker_sigma_mm, back.payload_kg) == (0.0125, 7.5)
     assert back.extra == {"operator": "test", "tracker_model": "AT960"}
+
+
+# --------------------------------------------------------------------------- ball nests
+
+SETUP_ONE = 'robot = "IRB1600-10/1.45"\nsmr_offset_mm = [60, 80, 90]\n'
+SETUP_TWO = 'robot = "IRB1600-10/1.45"\nsmr_offsets_mm = [[60, 80, 90], [-60, -80, 150]]\n'
+
+
+def test_two_nests_round_trip_with_the_ball_of_every_row(tmp_path):
+    setup = read_setup(write(tmp_path, "setup.toml", SETUP_TWO))
+    assert setup.ball_offsets_mm.tolist() == [[60, 80, 90], [-60, -80, 150]]
+    assert setup.smr_offset_mm.tolist() == [60, 80, 90]  # nest 0, the sweeps' ball
+    text = POINTS.replace("payload_kg\n", "payload_kg,ball\n")
+    text = "\n".join(line + ("" if i == 0 else f",{(i + 1) % 2}")
+                     for i, line in enumerate(text.strip().splitlines())) + "\n"
+    table = read_points(write(tmp_path, "p.csv", text))
+    assert table.ball.tolist() == [0, 1, 0] and "ball" not in table.extra
+    assert ball_offsets(table, setup).tolist() == [[60, 80, 90], [-60, -80, 150],
+                                                   [60, 80, 90]]
+    # written and read back: the same setup, the same rows, the same nests
+    back_setup = read_setup(write_setup(tmp_path / "again.toml", setup))
+    assert np.array_equal(back_setup.ball_offsets_mm, setup.ball_offsets_mm)
+    assert "smr_offsets_mm = [[" in (tmp_path / "again.toml").read_text()
+    back = read_points(write_points(tmp_path / "again.csv", table))
+    assert back.ball.tolist() == [0, 1, 0]
+    assert np.array_equal(back.xyz, table.xyz) and np.array_equal(back.q, table.q)
+
+
+def test_single_ball_files_load_and_write_as_before(tmp_path):
+    setup = read_setup(write(tmp_path, "setup.toml", SETUP_ONE))
+    assert setup.smr_offsets_mm is None and setup.ball_offsets_mm.tolist() == [[60, 80, 90]]
+    table = read_points(write(tmp_path, "p.csv", POINTS))
+    assert table.ball is None
+    assert ball_offsets(table, setup).tolist() == [[60, 80, 90]] * 3
+    # the writers leave the old format as it was: one offset key, no ball column
+    toml = write_setup(tmp_path / "again.toml", setup).read_text()
+    assert "smr_offset_mm = [60.000000, 80.000000, 90.000000]" in toml
+    assert "smr_offsets_mm" not in toml
+    header = write_points(tmp_path / "again.csv", table).read_text().splitlines()[0]
+    assert header == "point_id,j1,j2,j3,j4,j5,j6,x,y,z,payload_kg"
+    # one nest listed under the new key is the old single ball
+    one = read_setup(write(tmp_path, "one.toml", SETUP_ONE.replace(
+        "smr_offset_mm = [60, 80, 90]", "smr_offsets_mm = [[60, 80, 90]]")))
+    assert one.smr_offsets_mm is None and one.smr_offset_mm.tolist() == [60, 80, 90]
+
+
+@pytest.mark.parametrize(("setup_text", "ball", "words"), [
+    (SETUP_TWO, "2", "ball 2 has no offset: the setup (setup.toml) declares nests 0..1"),
+    (SETUP_ONE, "1", "ball 1 has no offset: the setup (setup.toml) declares only one ball"),
+])
+def test_a_ball_without_an_offset_is_an_error_at_its_row_and_column(tmp_path, setup_text, ball,
+                                                                    words):
+    setup = read_setup(write(tmp_path, "setup.toml", setup_text))
+    text = POINTS.replace("payload_kg\n", "payload_kg,ball\n")
+    lines = text.strip().splitlines()
+    lines[1:] = [line + f",{b}" for line, b in zip(lines[1:], ["0", "0", ball])]
+    table = read_points(write(tmp_path, "p.csv", "\n".join(lines) + "\n"))
+    with pytest.raises(MeasurementError) as err:
+        ball_offsets(table, setup)
+    message = str(err.value)
+    assert "p.csv" in message and "row 4" in message and "'ball'" in message
+    assert words in message and "\n" not in message
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ('smr_offset_mm = [1, 2, 3]\nsmr_offsets_mm = [[1, 2, 3], [4, 5, 60]]', "either"),
+    ("smr_offsets_mm = [1, 2, 3]", "list of 1 to"),
+    ("smr_offsets_mm = [[1, 2, 3], [1, 2]]", r"'smr_offsets_mm\[1\]' must be three numbers"),
+    ("smr_offsets_mm = [[60, 80, 90], [61, 80, 90]]", "nests 0 and 1"),
+    ("smr_offsets_mm = [[60, 80, 90], [0.1, 0.1, 0.1]]", "looks like metres"),
+])
+def test_bad_nests_are_refused_on_their_line(tmp_path, text, words):
+    path = write(tmp_path, "setup.toml", 'robot = "IRB1600-10/1.45"\n' + text + "\n")
+    with pytest.raises(MeasurementError, match=words) as err:
+        read_setup(path)
+    assert "setup.toml:" in str(err.value)
+
+
+def test_a_ball_column_is_an_integer_and_the_sweeps_use_nest_0(tmp_path):
+    text = POINTS.replace("payload_kg\n", "payload_kg,ball\n").strip().splitlines()
+    text[1:] = [line + ",0.5" for line in text[1:]]
+    with pytest.raises(MeasurementError, match=r"row 2, column 'ball'.*not an integer"):
+        read_points(write(tmp_path, "p.csv", "\n".join(text) + "\n"))
+    sweeps = SWEEPS.replace("x,y,z\n", "x,y,z,ball\n").strip().splitlines()
+    sweeps[1:] = [line + (",1" if i == 2 else ",0") for i, line in enumerate(sweeps[1:])]
+    with pytest.raises(MeasurementError, match=r"row 4, column 'ball'.*ball 0 only"):
+        read_sweeps(write(tmp_path, "s.csv", "\n".join(sweeps) + "\n"))
 
 
 @pytest.mark.parametrize("delimiter", [";", "\t"])

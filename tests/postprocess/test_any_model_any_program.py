@@ -14,6 +14,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -28,7 +29,7 @@ from rapidfix.errors.candidates.tool_offset import ToolOffset
 from rapidfix.errors.effects import registered_effects
 from rapidfix.errors.joint_rbf import OutsideRangeWarning
 from rapidfix.errors.model import ErrorModel
-from rapidfix.exceptions import RapidfixError
+from rapidfix.exceptions import InvalidOption, RapidfixError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission_forms import robtarget_literals
@@ -152,6 +153,13 @@ def models(draw):
        st.sampled_from(["jointtargets", "robtargets"]), st.booleans())
 def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, emit, approach):
     comp = Compensator(ROBOT, model, "random.json", "0" * 64)
+    if approach and emit == "robtargets":
+        # approach points are joint positions: refused before anything is read, with the
+        # one-line error naming the option, never recorded in a header without them
+        with pytest.raises(InvalidOption, match="approach needs emit 'jointtargets'") as err:
+            RewriteOptions(emit=emit, temperature_c=temperature, approach=approach)
+        assert "\n" not in str(err.value)
+        return
     options = RewriteOptions(emit=emit, temperature_c=temperature, approach=approach)
     try:
         with warnings.catch_warnings():
@@ -184,3 +192,19 @@ def test_measurement_effects_never_move_a_program():
     from rapidfix.errors.compensate import compensate
 
     assert np.array_equal(compensate(model, ROBOT, q), q)
+
+
+def test_approach_with_robtargets_is_a_usage_error_on_the_command_line(cell, samples, tmp_path,
+                                                                       capsys):
+    from rapidfix.cli import main
+
+    out = tmp_path / "o.mod"
+    code = main(["rewrite", str(samples / "ballbar.mod"), "--model", str(cell["model_path"]),
+                 "-o", str(out), "--emit", "robtargets", "--approach"])
+    err = capsys.readouterr().err
+    assert code == 2 and not out.exists()
+    assert err.count("\n") == 1 and "--approach needs --emit jointtargets" in err
+    # with joint targets the same options rewrite and the header records them
+    assert main(["rewrite", str(samples / "ballbar.mod"), "--model", str(cell["model_path"]),
+                 "-o", str(out), "--approach"]) in (0, 3)
+    assert "approach=fine_points" in out.read_text()

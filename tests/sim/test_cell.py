@@ -83,8 +83,15 @@ def test_simulate_cell_writes_a_readable_set_and_the_truth(tmp_path):
     # the data are the truth's robot, measured: rebuild it and compare
     vr = VirtualRobot.from_truth(truth)
     exact = vr.measure(cal.q, {"payload_kg": cal.payload_kg, "time_s": cal.time_s},
-                       noise=False, frame="tracker")
+                       noise=False, frame="tracker", ball=cal.ball)
     assert np.abs(exact - cal.xyz).max() < 0.15
+    # the points turn through the two nests the setup declares; the sweeps use nest 0
+    assert cal.ball.tolist() == [0, 1] * 6 and setup.ball_offsets_mm.shape == (2, 3)
+    np.testing.assert_allclose(setup.ball_offsets_mm, vr.smr_offsets_mm)
+    on_first = vr.measure(cal.q, {"payload_kg": cal.payload_kg, "time_s": cal.time_s},
+                          noise=False, frame="tracker")
+    apart = np.linalg.norm(on_first - cal.xyz, axis=1)
+    assert np.all(apart[cal.ball == 0] < 0.15) and np.all(apart[cal.ball == 1] > 100.0)
     with pytest.raises(OutputExistsError):
         simulate_cell(out, seed=5)
 
@@ -122,3 +129,29 @@ def test_simulate_command(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["simulate", str(out), "--effect", "gremlins"])
     assert set(EFFECTS) >= {"backlash", "joint_compliance"}
+    # --balls 1: one ball, written in the single-ball format
+    assert main([*args, "--force", "--balls", "1"]) == 0
+    assert read_points(out / "validation.csv").ball is None
+    assert "smr_offsets_mm" not in (out / "setup.toml").read_text()
+
+
+def test_one_ball_sessions_are_the_two_ball_sessions_on_nest_0():
+    """The second nest changes only the rows measured on it: same poses, conditions and
+    noise; with `balls=1` every point is on nest 0, and the truth says which nests."""
+    two = simulate_set(6, ("link_geometry",), n_calibration=8, n_validation=6)
+    one = simulate_set(6, ("link_geometry",), n_calibration=8, n_validation=6, balls=1)
+    assert one.calibration.ball is None and one.setup.smr_offsets_mm is None
+    assert "declared_smr_offsets_mm" not in one.truth
+    np.testing.assert_allclose(two.truth["declared_smr_offsets_mm"],
+                               two.setup.ball_offsets_mm)
+    for a, b in ((two.calibration, one.calibration), (two.validation, one.validation)):
+        assert np.array_equal(a.q, b.q)
+        same = a.ball == 0
+        assert np.array_equal(a.xyz[same], b.xyz[same])
+        # a nest 100 mm off the flange axis on the other side: far from the first
+        assert np.all(np.linalg.norm(a.xyz[~same] - b.xyz[~same], axis=1) > 100.0)
+    assert np.array_equal(two.sweeps.xyz, one.sweeps.xyz)
+    # the rows on nest 1 are that nest measured: noise-free truth within the noise
+    t = two.validation
+    exact = two.robot.measure(t.q, noise=False, frame="tracker", ball=t.ball)
+    assert np.abs(exact - t.xyz).max() < 0.15
