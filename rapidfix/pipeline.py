@@ -3,7 +3,7 @@
 Each step is one function so `rapidfix fit`, `rapidfix demo` (and later commands)
 read as a short sequence of calls. Nothing here does numerics of its own beyond
 glue: measurement processing lives in rapidfix.measure, the model in
-rapidfix.errors, the figures in rapidfix.report.
+rapidfix.error_model, the figures in rapidfix.report.
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ from typing import Any
 import numpy as np
 
 from rapidfix.digest import sha256_file
-from rapidfix.errors.compensate import solve_compensation
-from rapidfix.errors.context import Context
-from rapidfix.errors.fit import fit_error_model, sweep_gaps
-from rapidfix.errors.joint_rbf import JointRBF, OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.compensate import solve_compensation
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.fit import fit_error_model, sweep_gaps
+from rapidfix.error_model.joint_rbf import JointRBF, OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, is_shipped, load_robot
 from rapidfix.measure.files import (
@@ -300,7 +300,7 @@ def predicted_before_after(outcome: FitOutcome, points_csv: str | Path) -> Befor
 
 def execute_before_after(
     outcome: FitOutcome,
-    cell_robot: Any,
+    cell_robot: RobotModel,
     table: PointTable,
     *,
     seed: int,
@@ -326,7 +326,7 @@ def execute_before_after(
 
 
 def run_points_before_after(
-    outcome: FitOutcome, cell_robot: Any, points_csv: str | Path, *, seed: int
+    outcome: FitOutcome, cell_robot: RobotModel, points_csv: str | Path, *, seed: int
 ) -> BeforeAfter:
     """execute_before_after on a points CSV (validation points)."""
     return execute_before_after(outcome, cell_robot, read_points(points_csv), seed=seed)
@@ -365,7 +365,7 @@ def read_ballbar(path: str | Path) -> BallbarSetup:
 
 
 def run_ballbar_before_after(
-    outcome: FitOutcome, cell_robot: Any, ballbar_toml: str | Path, *, seed: int
+    outcome: FitOutcome, cell_robot: RobotModel, ballbar_toml: str | Path, *, seed: int
 ) -> BallbarRun:
     """The ballbar semicircle run before and after compensation (length deviations)."""
     bb = read_ballbar(ballbar_toml)

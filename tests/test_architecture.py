@@ -36,11 +36,11 @@ def test_a_broken_layer_is_reported(tmp_path):
     config.write_text(
         '[tool.importlinter]\nroot_package = "rapidfix"\n\n'
         '[[tool.importlinter.contracts]]\nname = "inverted"\ntype = "layers"\n'
-        'layers = ["rapidfix.kinematics", "rapidfix.errors"]\n', encoding="utf-8")
+        'layers = ["rapidfix.kinematics", "rapidfix.error_model"]\n', encoding="utf-8")
     done = subprocess.run([*_lint_imports(), "--config", str(config), "--no-cache"],
                           cwd=ROOT, capture_output=True, text=True, check=False)
     assert done.returncode != 0
-    assert "rapidfix.errors" in done.stdout and "BROKEN" in done.stdout
+    assert "rapidfix.error_model" in done.stdout and "BROKEN" in done.stdout
 
 
 def _self_attributes(function: ast.FunctionDef) -> set[str]:

@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from rapidfix import pipeline
-    from rapidfix.errors.model_file import save_model
+    from rapidfix.error_model.model_file import save_model
     from rapidfix.report.document import write_report
     from rapidfix.sim import VirtualRobot, simulate_cell
 

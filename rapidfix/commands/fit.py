@@ -55,7 +55,7 @@ def _fit(args: argparse.Namespace) -> None:
     """The work of `run`: every path checked first, the model written last, nothing
     written when any step fails."""
     from rapidfix import pipeline
-    from rapidfix.errors.model_file import save_model
+    from rapidfix.error_model.model_file import save_model
     from rapidfix.report.accuracy import validation_section
     from rapidfix.report.document import write_report
 

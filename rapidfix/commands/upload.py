@@ -14,7 +14,7 @@ from pathlib import Path
 
 from rapidfix.exceptions import LinkError
 from rapidfix.link import RECEIVER_MODULE
-from rapidfix.link.frames import MAX_PAYLOAD, OVERHEAD
+from rapidfix.link.protocol import MAX_PAYLOAD, OVERHEAD
 from rapidfix.link.simulator import SimulatedController
 from rapidfix.link.uploader import LinkSettings, UploadResult, plan_upload, upload_file
 

@@ -25,7 +25,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.kinematics import RobotModel
 from rapidfix.kinematics.frames import pose
 from rapidfix.postprocess.emission_forms import robtarget_literals
 from rapidfix.postprocess.execute import align_axis1, commanded_motions
@@ -75,7 +76,7 @@ def measured_range(model: Any) -> np.ndarray | None:
 ELBOW_MARGIN_DEG = 5.0
 
 
-def _elbow_bent(robot: Any, q: np.ndarray) -> np.ndarray:
+def _elbow_bent(robot: RobotModel, q: np.ndarray) -> np.ndarray:
     """Poses (mask) whose elbow is bent by more than ELBOW_MARGIN_DEG: a stretched arm
     is at the edge of its reach, where a real arm a little shorter than the nominal
     one cannot reach a target at all."""
@@ -87,7 +88,7 @@ def _elbow_bent(robot: Any, q: np.ndarray) -> np.ndarray:
     return sine > np.sin(np.radians(ELBOW_MARGIN_DEG))
 
 
-def pick_and_place(robot: Any, seed: int, *, moves: int = 24,
+def pick_and_place(robot: RobotModel, seed: int, *, moves: int = 24,
                    smr_offset_mm: np.ndarray | None = None,
                    ranges: np.ndarray | None = None) -> LoopProgram:
     """A cell program of about `moves` moves (see the module doc), reproducible from

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.errors.candidates.backlash import last_motion_direction
-from rapidfix.errors.context import Context
-from rapidfix.errors.fit_effects import MeasuredPoints
+from rapidfix.error_model.candidates.backlash import last_motion_direction
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.fit_effects import MeasuredPoints
 from rapidfix.measure.files import PointTable, Setup, ball_offsets
 
 #: per-axis tracker σ assumed when neither the model nor the setup states one (mm)

@@ -34,7 +34,7 @@ import numpy as np
 
 from rapidfix.diagnose.sensitivity import joint_derivatives
 from rapidfix.diagnose.structured import MIN_SPREAD
-from rapidfix.errors.candidates.rbf_correction import (
+from rapidfix.error_model.candidates.rbf_correction import (
     CONTEXT_FEATURES,
     JOINT_FEATURES,
     RBFCorrection,
@@ -42,9 +42,10 @@ from rapidfix.errors.candidates.rbf_correction import (
     feature_values,
     gaussian_design,
 )
-from rapidfix.errors.fit_effects import MeasuredPoints, jacobian
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 
 PHYSICS = "a smooth correction of one joint over a few features; its cause is unknown"
 #: centre counts and widths (unit box [−1, 1] per feature) searched
@@ -130,7 +131,7 @@ def _context_features(data: MeasuredPoints) -> list[str]:
     return out
 
 
-def propose(model: ErrorModel, robot: Any, data: MeasuredPoints) -> Proposal:
+def propose(model: ErrorModel, robot: RobotModel, data: MeasuredPoints) -> Proposal:
     """The best cross-validated correction of unknown cause on the current model's
     calibration residual (see the module docstring)."""
     targets = list(range(6))

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.errors.candidates.backlash import last_motion_direction
-from rapidfix.errors.effect import Effect
-from rapidfix.errors.fit_effects import MeasuredPoints
+from rapidfix.error_model.candidates.backlash import last_motion_direction
+from rapidfix.error_model.effect import Effect
+from rapidfix.error_model.fit_effects import MeasuredPoints
 
 
 @dataclass(frozen=True)

@@ -36,11 +36,12 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from rapidfix.errors.candidates.geometry import LinkGeometry
-from rapidfix.errors.candidates.joint_reference import OFFSET_JOINTS, JointReference
-from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.fit_effects import MeasuredPoints, predict
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.geometry import LinkGeometry
+from rapidfix.error_model.candidates.joint_reference import OFFSET_JOINTS, JointReference
+from rapidfix.error_model.candidates.tool_offset import ToolOffset
+from rapidfix.error_model.fit_effects import MeasuredPoints, predict
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 
 #: a joint's zero after the maker's calibration (1σ, rad)
 JOINT_ZERO_SIGMA_RAD = np.radians(0.03)
@@ -103,7 +104,7 @@ def _joint6_zero(model: ErrorModel, data: MeasuredPoints) -> float:
     return float(total.mean())
 
 
-def resolve_flange_gauge(model: ErrorModel, robot: Any,
+def resolve_flange_gauge(model: ErrorModel, robot: RobotModel,
                          data: MeasuredPoints) -> GaugeChange | None:
     """Move `model` (its effects are replaced) to the most probable point of its unseen flange turn.
 
@@ -156,7 +157,7 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
                                         for k in (JointReference, LinkGeometry, ToolOffset))
     p = reference.params()
     p[_J6] += x[0]
-    reference.set_params(p)
+    reference.set_fitted(p)
     turn, shift, ball_move = np.zeros(3), np.zeros(3), np.zeros(3)
     if geometry is not None:
         turn, shift = x[1:4], x[4:7]
@@ -166,7 +167,7 @@ def resolve_flange_gauge(model: ErrorModel, robot: Any,
                            [HOME_SHIFT_SIGMA_MM] * 3 + [HOME_TURN_SIGMA_RAD] * 3)
     if ball_offset is not None:
         ball_move = x[-3:]
-        ball_offset.set_params(ball_offset.params() + ball_move)
+        ball_offset.set_fitted(ball_offset.params() + ball_move)
     change = float(np.abs(predict(trial, robot, data) - predict(model, robot, data)).max())
     if not np.isfinite(change) or change > MAX_POINT_CHANGE_MM:
         return None

@@ -25,9 +25,10 @@ from rapidfix.diagnose.selection import (
     Trial,
 )
 from rapidfix.diagnose.structured import ranking_records
-from rapidfix.errors.candidates.geometry import LinkGeometry, error_names
-from rapidfix.errors.effect import Effect
-from rapidfix.errors.fit_effects import MeasuredPoints
+from rapidfix.error_model.candidates.geometry import LinkGeometry, error_names
+from rapidfix.error_model.effect import Effect
+from rapidfix.error_model.fit_effects import MeasuredPoints
+from rapidfix.kinematics import RobotModel
 from rapidfix.report.document import Report, Table
 from rapidfix.report.figures import position_error_figure
 
@@ -173,7 +174,7 @@ def _error_table(title: str, rows: list[tuple[str, dict[str, Any]]]) -> Table:
                  "the robot still misses by after compensation with that model.")
 
 
-def build_report(sel: Selection, robot: Any, calibration: MeasuredPoints,
+def build_report(sel: Selection, robot: RobotModel, calibration: MeasuredPoints,
                  validation: MeasuredPoints, *, noise_source: str,
                  title: str = "rapidfix diagnosis", notes: list[str] | None = None,
                  extra_summary: dict[str, Any] | None = None) -> Report:

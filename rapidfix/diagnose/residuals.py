@@ -14,10 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.errors.candidates.registration import world_to_base
-from rapidfix.errors.fit_effects import MeasuredPoints
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.registration import world_to_base
+from rapidfix.error_model.fit_effects import MeasuredPoints
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 from rapidfix.report.metrics import position_error_stats
 
 
@@ -47,7 +48,7 @@ class Residuals:
         return position_error_stats(np.zeros_like(self.vectors), self.vectors)
 
 
-def residuals(model: ErrorModel, robot: Any, data: MeasuredPoints) -> Residuals:
+def residuals(model: ErrorModel, robot: RobotModel, data: MeasuredPoints) -> Residuals:
     """Measured − predicted ball positions (N, 3) mm in the model's base frame."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)

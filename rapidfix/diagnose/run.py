@@ -2,7 +2,7 @@
 
 `diagnose` works on objects (a model, the robot, the setup, two point tables) and
 returns a `Diagnosis`; `diagnose_files` reads the files, runs it, saves the
-extended model (`rapidfix.errors.model_file`) and writes the HTML + JSON report.
+extended model (`rapidfix.error_model.model_file`) and writes the HTML + JSON report.
 The calibration points are the only ones fitted; the validation points only
 ever judge.
 """
@@ -14,15 +14,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rapidfix.diagnose.candidates import CANDIDATES
+from rapidfix.diagnose.candidate_builders import CANDIDATES
 from rapidfix.diagnose.data import measured_points, noise_sigma_mm, with_known_history
 from rapidfix.diagnose.gauges import resolve_flange_gauge
 from rapidfix.diagnose.report import build_report, statement, trial_record
 from rapidfix.diagnose.selection import Selection, select
 from rapidfix.digest import sha256_file
-from rapidfix.errors.fit_effects import MeasuredPoints
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import load_model, save_model
+from rapidfix.error_model.fit_effects import MeasuredPoints
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import load_model, save_model
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, load_robot
 from rapidfix.measure.files import (

@@ -3,7 +3,7 @@
 Every model here is fitted on the calibration points only; the validation points
 are only ever predicted. Starting from the given model with its tracker frame and
 its joint offsets and first harmonics re-referenced on the calibration set
-(`rapidfix.errors.candidates.joint_reference`), each round tries every
+(`rapidfix.error_model.candidates.joint_reference`), each round tries every
 remaining candidate (added to what was accepted so far, everything refitted) and
 accepts the best one that passes all three tests:
 
@@ -50,22 +50,22 @@ import copy
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
-from rapidfix.diagnose.candidates import CANDIDATES, REPEATABLE, Candidate, Setting, build
+from rapidfix.diagnose.candidate_builders import CANDIDATES, REPEATABLE, Candidate, Setting, build
 from rapidfix.diagnose.data import MEAN_NORM_PER_SIGMA
 from rapidfix.diagnose.fallback import PHYSICS as FALLBACK_PHYSICS
 from rapidfix.diagnose.fallback import Proposal, propose
 from rapidfix.diagnose.residuals import Residuals, residuals
 from rapidfix.diagnose.structured import Screened, screen
-from rapidfix.errors.candidates.joint_reference import JointReference
-from rapidfix.errors.candidates.registration import TrackerFrame
-from rapidfix.errors.effect import Effect
-from rapidfix.errors.fit_effects import EffectsFit, MeasuredPoints, fit_free_effects
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.joint_reference import JointReference
+from rapidfix.error_model.candidates.registration import TrackerFrame
+from rapidfix.error_model.effect import Effect
+from rapidfix.error_model.fit_effects import EffectsFit, MeasuredPoints, fit_free_effects
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 from rapidfix.measure.registration import rigid_fit
 
 BIC_MARGIN = 10.0
@@ -147,14 +147,14 @@ class Selection:
         return MEAN_NORM_PER_SIGMA * self.noise_sigma_mm
 
 
-def _fit(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoints) -> Stage:
+def _fit(model: ErrorModel, robot: RobotModel, cal: MeasuredPoints, val: MeasuredPoints) -> Stage:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)
         fit = fit_free_effects(model, robot, cal)
     return Stage(model, fit, residuals(model, robot, cal), residuals(model, robot, val))
 
 
-def initial_frame(model: ErrorModel, robot: Any, cal: MeasuredPoints) -> TrackerFrame:
+def initial_frame(model: ErrorModel, robot: RobotModel, cal: MeasuredPoints) -> TrackerFrame:
     """Tracker pose from a rigid fit of the model's predictions to the calibration points."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OutsideRangeWarning)
@@ -163,7 +163,7 @@ def initial_frame(model: ErrorModel, robot: Any, cal: MeasuredPoints) -> Tracker
     return TrackerFrame.from_pose(R, t)
 
 
-def starting_stages(model: ErrorModel, robot: Any, cal: MeasuredPoints,
+def starting_stages(model: ErrorModel, robot: RobotModel, cal: MeasuredPoints,
                     val: MeasuredPoints) -> tuple[Stage, Stage]:
     """The given model with its tracker frame fitted (before), and re-referenced (baseline)."""
     frozen = copy.deepcopy(model)
@@ -291,7 +291,7 @@ def try_fallback(current: Stage, setting: Setting, val: MeasuredPoints,
     return trial, proposal
 
 
-def select(model: ErrorModel, robot: Any, cal: MeasuredPoints, val: MeasuredPoints, *,
+def select(model: ErrorModel, robot: RobotModel, cal: MeasuredPoints, val: MeasuredPoints, *,
            default_payload_kg: float, noise_sigma_mm: float,
            candidates: Sequence[str] = CANDIDATES,
            progress: Callable[[str], None] | None = None) -> Selection:

@@ -7,15 +7,14 @@ every variant.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
-from rapidfix.errors.fit_effects import MeasuredPoints, predict
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.fit_effects import MeasuredPoints, predict
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 
 
-def joint_derivatives(model: ErrorModel, robot: Any, data: MeasuredPoints) -> np.ndarray:
+def joint_derivatives(model: ErrorModel, robot: RobotModel, data: MeasuredPoints) -> np.ndarray:
     """d(predicted point)/d(joint j error) (6, 3N) by forward differences."""
     base = predict(model, robot, data).ravel()
     out = np.empty((6, base.shape[0]))

@@ -28,14 +28,15 @@ from typing import Any
 import numpy as np
 
 from rapidfix.diagnose.sensitivity import joint_derivatives
-from rapidfix.errors.candidates.frame_driver import FrameDriver
-from rapidfix.errors.candidates.gravity import nominal_robot
-from rapidfix.errors.candidates.joint_driver import JointDriver
-from rapidfix.errors.context import last_motion_direction
-from rapidfix.errors.effect import Effect
-from rapidfix.errors.fit_effects import MeasuredPoints, jacobian, predict
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.frame_driver import FrameDriver
+from rapidfix.error_model.candidates.gravity import nominal_robot
+from rapidfix.error_model.candidates.joint_driver import JointDriver
+from rapidfix.error_model.context import last_motion_direction
+from rapidfix.error_model.effect import Effect
+from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian, predict
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import RobotModel
 
 #: a context variable must vary by more than this to drive an effect
 MIN_SPREAD = {"temp_c": 0.2, "time_s": 60.0, "payload_kg": 0.1}
@@ -111,7 +112,7 @@ def variants(robot_name: str, data: MeasuredPoints, default_payload_kg: float
     return out + frame_variants(robot_name, data, default_payload_kg)
 
 
-def point_columns(model: ErrorModel, robot: Any, data: MeasuredPoints, effect: Effect,
+def point_columns(model: ErrorModel, robot: RobotModel, data: MeasuredPoints, effect: Effect,
                   base: np.ndarray) -> np.ndarray:
     """How the predicted points (3N,) move per unit of each parameter of `effect` added
     to the model at zero, (3N, P), by forward differences of its steps."""
@@ -122,13 +123,13 @@ def point_columns(model: ErrorModel, robot: Any, data: MeasuredPoints, effect: E
     for i, h in enumerate(steps):  # a few parameters, each one vectorised evaluation
         p = zero.copy()
         p[i] = h
-        effect.set_params(p)
+        effect.set_fitted(p)
         cols[:, i] = (predict(trial, robot, data).ravel() - base) / h
-    effect.set_params(zero)
+    effect.set_fitted(zero)
     return cols
 
 
-def screen(model: ErrorModel, robot: Any, data: MeasuredPoints, default_payload_kg: float
+def screen(model: ErrorModel, robot: RobotModel, data: MeasuredPoints, default_payload_kg: float
            ) -> list[Screened]:
     """Every variant screened on the current (fitted) model's residual, best first."""
     with warnings.catch_warnings():

@@ -7,7 +7,6 @@ Knows nothing of RAPID or of error models.
 """
 
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
-from rapidfix.kinematics.model import RobotModel
 from rapidfix.kinematics.robot_file import (
     available_robots,
     is_shipped,
@@ -15,6 +14,7 @@ from rapidfix.kinematics.robot_file import (
     parse_robot,
     read_robot_file,
 )
+from rapidfix.kinematics.robot_model import RobotModel
 
 __all__ = [
     "IKSolutions",

@@ -19,7 +19,7 @@ from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
 from rapidfix.kinematics.screws import product_of_exponentials
 
 if TYPE_CHECKING:
-    from rapidfix.kinematics.model import RobotModel
+    from rapidfix.kinematics.robot_model import RobotModel
 
 QUADRANT = np.pi / 2
 CONF_TOL = np.radians(0.01)

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from rapidfix.kinematics.frames import Tool, WorkObject
-    from rapidfix.kinematics.model import RobotModel
+    from rapidfix.kinematics.robot_model import RobotModel
 
 WRIST_TOL = 1e-7
 """|sin θ5| below which the wrist counts as singular (θ4 is then held)."""

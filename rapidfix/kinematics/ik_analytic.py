@@ -27,7 +27,7 @@ from rapidfix.kinematics.screws import invert_transform, rotate_vectors
 from rapidfix.kinematics.subproblems import subproblem1, subproblem2, subproblem3
 
 if TYPE_CHECKING:
-    from rapidfix.kinematics.model import RobotModel
+    from rapidfix.kinematics.robot_model import RobotModel
 
 _PARALLEL_TOL = 1e-9
 _DISTANCE_TOL = 1e-6  # mm

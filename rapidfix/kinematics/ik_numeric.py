@@ -13,7 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 if TYPE_CHECKING:
-    from rapidfix.kinematics.model import RobotModel
+    from rapidfix.kinematics.robot_model import RobotModel
 
 POSITION_TOL_MM = 1e-10
 ROTATION_TOL_RAD = 1e-12

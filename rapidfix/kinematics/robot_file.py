@@ -19,7 +19,7 @@ import numpy as np
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.frames import pose
 from rapidfix.kinematics.ik_analytic import check_structure
-from rapidfix.kinematics.model import RobotModel
+from rapidfix.kinematics.robot_model import RobotModel
 
 if sys.version_info >= (3, 11):
     import tomllib

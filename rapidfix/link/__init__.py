@@ -1,6 +1,6 @@
 """Serial upload of programs to the robot controller, for cells without a network.
 
-- :mod:`~rapidfix.link.frames`: frame layout, kinds, statuses, the frame decoder.
+- :mod:`~rapidfix.link.protocol`: frame layout, kinds, statuses, the frame decoder.
 - :mod:`~rapidfix.link.checksum`: CRC-16/CCITT-FALSE, computable in RAPID.
 - :mod:`~rapidfix.link.uploader`: the host side on pyserial (go-back-N window).
 - :mod:`~rapidfix.link.receiver`: the controller's state machine in Python.
@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from rapidfix.link.faults import LinkFaults
-from rapidfix.link.frames import PROTOCOL_VERSION
+from rapidfix.link.protocol import PROTOCOL_VERSION
 from rapidfix.link.simulator import SimulatedController
 from rapidfix.link.uploader import (
     LinkSettings,

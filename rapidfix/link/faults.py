@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.link.frames import HEADER_SIZE, OVERHEAD, SOH
+from rapidfix.link.protocol import HEADER_SIZE, OVERHEAD, SOH
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from rapidfix.link.checksum import crc16
-from rapidfix.link.frames import (
+from rapidfix.link.protocol import (
     BUSY_EVERY,
     PROTOCOL_VERSION,
     DoneStatus,

@@ -3,7 +3,7 @@
 :class:`SimulatedController` opens a pty pair (``os.openpty``); the host opens
 the slave side (``.port``, e.g. ``/dev/pts/7``) with pyserial like any serial
 port, and a thread serves the master side: it decodes frames with
-:class:`~rapidfix.link.frames.FrameReader` (abandoning a partial frame after the
+:class:`~rapidfix.link.protocol.FrameReader` (abandoning a partial frame after the
 inter-byte time-out, as RfxRecv.mod does), hands them to
 :class:`~rapidfix.link.receiver.ControllerReceiver` and writes the replies back.
 
@@ -26,7 +26,7 @@ from types import TracebackType
 
 from rapidfix.exceptions import LinkError
 from rapidfix.link.faults import FaultInjector, LinkFaults
-from rapidfix.link.frames import PROTOCOL_VERSION, FrameReader
+from rapidfix.link.protocol import PROTOCOL_VERSION, FrameReader
 from rapidfix.link.receiver import ControllerReceiver
 
 BITS_PER_BYTE = 10  # start bit, 8 data bits, stop bit

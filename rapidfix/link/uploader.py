@@ -30,7 +30,7 @@ from tqdm import tqdm
 
 from rapidfix.exceptions import LinkError
 from rapidfix.link.checksum import crc16
-from rapidfix.link.frames import (
+from rapidfix.link.protocol import (
     MAX_FILE_SIZE,
     MAX_PAYLOAD,
     NAME_PATTERN,

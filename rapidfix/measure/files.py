@@ -39,7 +39,7 @@ import numpy as np
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import KinematicsError, MeasurementError, RapidfixWarning
-from rapidfix.kinematics import load_robot
+from rapidfix.kinematics import RobotModel, load_robot
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -446,7 +446,7 @@ def _check_units(raw: _RawTable, joints_deg: np.ndarray, xyz: np.ndarray) -> Non
             file=raw.path, row=int(raw.rows[0]), column="j1")
 
 
-def robot_reach_mm(robot: Any) -> float:
+def robot_reach_mm(robot: RobotModel) -> float:
     """An upper bound of the flange's distance from the base origin (mm): the chain of
     axis points and the tool0 home position, link by link."""
     points = np.vstack([np.zeros(3), np.asarray(robot.axis_points, dtype=float),

@@ -11,7 +11,7 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `naming`       collision-free RAPID identifiers for new data
 - `emission_forms` what the rewrite writes (literals, declarations, MoveAbsJ), fast forms
 - `header`       the header comment, and recognising a compensated program
-- `check_units`  the new statements and declarations, as a program of their own
+- `reparse_changes`  the new statements and declarations, as a program of their own
 - `verify`       re-parse them (in bulk where simple) and predict where the robot will go
 - `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)

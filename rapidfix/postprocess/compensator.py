@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import Any
 
 from rapidfix.digest import sha256_bytes, sha256_file
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import load_model
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import load_model
 from rapidfix.exceptions import KinematicsError, ModelError
-from rapidfix.kinematics import load_robot, parse_robot
+from rapidfix.kinematics import RobotModel, load_robot, parse_robot
 from rapidfix.kinematics.ik import prepare
 
 
@@ -23,7 +23,7 @@ from rapidfix.kinematics.ik import prepare
 class Compensator:
     """Robot model, error model (with its file and hash) and outside RAPID declarations."""
 
-    robot: Any
+    robot: RobotModel
     model: ErrorModel
     model_path: str
     model_sha256: str

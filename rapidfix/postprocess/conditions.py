@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.errors.context import STILL_RAD, Context
+from rapidfix.error_model.context import STILL_RAD, Context
 from rapidfix.postprocess.plan import FreeConfiguration
 from rapidfix.postprocess.resolve import Declarations
 from rapidfix.rapid import Program

@@ -12,10 +12,10 @@ rewritten one). Used by the demo and the acceptance tests.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from rapidfix.kinematics import RobotModel
 from rapidfix.kinematics.ik_result import IKStatus
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
@@ -35,7 +35,7 @@ class Execution:
     placement: Placement
 
 
-def commanded_motions(program: Program, robot: Any, decls: list[Program] | None = None
+def commanded_motions(program: Program, robot: RobotModel, decls: list[Program] | None = None
                       ) -> Execution:
     """The joints the controller commands for every static motion, in program order."""
     outside = Declarations(decls or [])
@@ -86,7 +86,7 @@ def commanded_motions(program: Program, robot: Any, decls: list[Program] | None 
     return Execution(np.array(motions, dtype=int), q, names, placement)
 
 
-def align_axis1(robot: Any, actual: np.ndarray, intended: np.ndarray) -> np.ndarray:
+def align_axis1(robot: RobotModel, actual: np.ndarray, intended: np.ndarray) -> np.ndarray:
     """`actual` positions (K,3) turned about axis 1 and moved along it by the angle and
     height that fit `intended` best.
 

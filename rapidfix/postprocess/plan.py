@@ -11,14 +11,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from rapidfix.errors.compensate import solve_compensation
-from rapidfix.errors.context import Context
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.compensate import solve_compensation
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.model import ErrorModel
 from rapidfix.exceptions import ModelError
+from rapidfix.kinematics import RobotModel
 from rapidfix.kinematics.ik_result import IKStatus
 from rapidfix.postprocess.placement import Placement
 
@@ -47,14 +47,15 @@ class Plan:
     context: Context
 
 
-def ik_on_conf(robot: Any, flange: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def ik_on_conf(robot: RobotModel, flange: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray,
+               np.ndarray]:
     """The IK solution each confdata names (q (N,6) rad, status (N,)): `robot.ik_conf`,
     which chooses on the compact IK result without expanding every ±360° variant."""
     return robot.ik_conf(flange, np.asarray(conf, dtype=int))
 
 
 def compensate_joints(
-    model: ErrorModel, robot: Any, q_ideal: np.ndarray, ctx: Context
+    model: ErrorModel, robot: RobotModel, q_ideal: np.ndarray, ctx: Context
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Commanded joints (N,6) for ideal joints, with success mask and reasons."""
     n = q_ideal.shape[0]
@@ -76,7 +77,7 @@ def compensate_joints(
     return np.where(ok[:, None], q_cmd, q_ideal), ok, reason
 
 
-def _explain_conf(robot: Any, flange: np.ndarray, conf: np.ndarray, status: np.ndarray,
+def _explain_conf(robot: RobotModel, flange: np.ndarray, conf: np.ndarray, status: np.ndarray,
                   reason: np.ndarray, shown: int = 3) -> None:
     """Name the confdata that do reach a target whose own confdata names no solution.
 
@@ -114,7 +115,7 @@ class FreeConfiguration:
 _FREE_PASSES = 64
 
 
-def _follow_nearest(robot: Any, flange: np.ndarray, q: np.ndarray, status: np.ndarray,
+def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status: np.ndarray,
                     free: FreeConfiguration) -> tuple[np.ndarray, np.ndarray]:
     """Joints (N,6) and status (N,) with the free rows on the solution nearest the joints
     of the move before them. A free row whose move before is not known keeps its
@@ -157,7 +158,7 @@ Conditions = Callable[[np.ndarray, np.ndarray], Context]
 
 def plan_targets(
     model: ErrorModel,
-    robot: Any,
+    robot: RobotModel,
     targets: np.ndarray,
     conf: np.ndarray,
     placement: Placement,
@@ -208,7 +209,7 @@ def plan_targets(
 
 def plan_nearest(
     model: ErrorModel,
-    robot: Any,
+    robot: RobotModel,
     targets: np.ndarray,
     seed: np.ndarray,
     placement: Placement,

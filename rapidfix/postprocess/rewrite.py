@@ -11,7 +11,7 @@ Steps, each vectorised over all targets of the file:
    inserts whole statements and declarations, which are also collected as
    `CheckUnits`;
 6. parse the output again — its new units, which is the same check as
-   parsing all of it (`check_units`) — and push what it commands through the
+   parsing all of it (`reparse_changes`) — and push what it commands through the
    model (`verify`): the predicted worst-case TCP deviation.
 
 A MoveL or MoveC whose start is not known before run time (the first move of
@@ -31,7 +31,7 @@ import numpy as np
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.digest import sha256_bytes
-from rapidfix.errors.context import Context
+from rapidfix.error_model.context import Context
 from rapidfix.exceptions import (
     InvalidOption,
     OutputExistsError,
@@ -39,7 +39,6 @@ from rapidfix.exceptions import (
 )
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.postprocess.chain import predecessors
-from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.conditions import ProgramConditions
 from rapidfix.postprocess.emission_forms import (
@@ -63,6 +62,7 @@ from rapidfix.postprocess.path import (
 )
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, compensate_joints, plan_nearest, plan_targets
+from rapidfix.postprocess.reparse_changes import CheckUnits
 from rapidfix.postprocess.resolve import Declarations, Site, Targets, operand_label, resolve
 from rapidfix.postprocess.verify import Expected, predicted_deviation, read_back
 from rapidfix.rapid import MotionInstruction, Program, parse_program

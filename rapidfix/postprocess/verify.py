@@ -1,7 +1,7 @@
 """Check a rewritten program the way the controller and the robot will see it.
 
 The output is parsed again — its new statements and declarations, which is the
-same check as parsing the whole of it (see `check_units`); a program that does
+same check as parsing the whole of it (see `reparse_changes`); a program that does
 not parse is never written. For every compensated move the target is read back
 from that text, turned into the joints the controller will command (a
 jointtarget as written, rounded to the controller's single precision; a
@@ -13,17 +13,17 @@ and the intended TCP is the predicted deviation.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from rapidfix.errors.context import Context
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.model import ErrorModel
 from rapidfix.exceptions import RapidfixError, RapidSemanticError
+from rapidfix.kinematics import RobotModel
 from rapidfix.kinematics.frames import pose
-from rapidfix.postprocess.check_units import CheckUnits
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
+from rapidfix.postprocess.reparse_changes import CheckUnits
 from rapidfix.rapid import MotionInstruction
 from rapidfix.rapid.readback import ReadBack, read_targets_full, read_targets_in_bulk
 
@@ -79,7 +79,7 @@ def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> Read
     return read_targets_full(parse_units(units, filename), expected.motion, expected.slot)
 
 
-def commanded_joints(robot: Any, read: ReadBack, expected: Expected,
+def commanded_joints(robot: RobotModel, read: ReadBack, expected: Expected,
                      filename: str = "") -> np.ndarray:
     """Joints (K,6) rad the controller commands for the targets read back from the output."""
     k = expected.motion.shape[0]
@@ -102,7 +102,7 @@ def commanded_joints(robot: Any, read: ReadBack, expected: Expected,
 
 
 def predicted_deviation(
-    model: ErrorModel, robot: Any, read: ReadBack, expected: Expected, filename: str = ""
+    model: ErrorModel, robot: RobotModel, read: ReadBack, expected: Expected, filename: str = ""
 ) -> np.ndarray:
     """Predicted TCP position error (K,) mm of every expected pose of the output."""
     if expected.motion.shape[0] == 0:

@@ -47,7 +47,7 @@ class BallbarRun:
 
 
 def fit_table(joint_stats: Sequence[dict[str, Any]]) -> Table:
-    """Per-joint fit statistics (from rapidfix.errors.fit) as a table."""
+    """Per-joint fit statistics (from rapidfix.error_model.fit) as a table."""
     rows = []
     for s in joint_stats:
         if not s.get("points"):

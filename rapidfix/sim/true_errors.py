@@ -1,6 +1,6 @@
 """The true errors of a virtual robot: what the fitter has to find, drawn from a seed.
 
-Written independently of `rapidfix.errors` on purpose: the simulator is the truth
+Written independently of `rapidfix.error_model` on purpose: the simulator is the truth
 the error model is judged against, so it shares no code with it.
 
 Always present: a per-joint, angle-dependent error Δθ_j(θ_j) = offset + Σ gear
@@ -60,6 +60,8 @@ from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from rapidfix.kinematics import RobotModel
 
 EFFECTS: tuple[str, ...] = (
     "joint_compliance",
@@ -184,7 +186,7 @@ class TrueErrors:
     # ---- drawing ---------------------------------------------------------------------
 
     @classmethod
-    def draw(cls, robot: Any, effects: tuple[str, ...] | list[str],
+    def draw(cls, robot: RobotModel, effects: tuple[str, ...] | list[str],
              rng: np.random.Generator) -> TrueErrors:
         """Random true errors for `robot` (a RobotModel) with the named optional effects."""
         unknown = sorted(set(effects) - set(EFFECTS))
@@ -407,7 +409,7 @@ class TrueErrors:
         )
 
 
-def _perturbed_geometry(robot: Any, rng: np.random.Generator
+def _perturbed_geometry(robot: RobotModel, rng: np.random.Generator
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Screws of joints 2–6 and tool0's home pose moved by link-length and tilt errors.
 

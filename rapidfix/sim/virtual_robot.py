@@ -6,7 +6,7 @@ would report (with joint repeatability and tracker noise). The context gives the
 conditions each row ran under — any object or mapping with the optional fields
 `payload_kg`, `time_s`, `temp_c` (N,) and `q_prev` (N, 6) rad (the pose before
 each row; without it the rows are taken as executed in order). This is the same
-shape as `rapidfix.errors.context.Context`, which is accepted as is.
+shape as `rapidfix.error_model.context.Context`, which is accepted as is.
 
 The flange may carry several target-ball nests (`smr_offsets_mm`, nest 0 first):
 `measure(..., ball=index)` measures each row on its own nest. A payload without its

@@ -16,9 +16,9 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from rapidfix.errors.compensate import solve_general, solve_per_joint
-from rapidfix.errors.joint_rbf import JointRBF, fit_network
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.compensate import solve_general, solve_per_joint
+from rapidfix.error_model.joint_rbf import JointRBF, fit_network
+from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import load_robot
 
 N = 100_000

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from rapidfix import pipeline
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.model_file import save_model
 from rapidfix.postprocess.batch import BatchSettings
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file

@@ -36,7 +36,7 @@ from batch_timing import batch_timings
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.model_file import save_model
 from rapidfix.rapid import parse_program
 from rapidfix.rapid.grammar import grammar_text
 from rapidfix.rapid.source import decode_source

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rapidfix import pipeline
 from rapidfix.demo import demo_campaign, format_campaign
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.model_file import save_model
 from rapidfix.sim import simulate_cell
 
 

@@ -11,9 +11,9 @@ import pytest
 
 from rapidfix.campaign.iso9283 import CubeRuns, distance_accuracy, pose_accuracy
 from rapidfix.cli import main
-from rapidfix.errors.context import Context
-from rapidfix.errors.joint_rbf import JointRBF
-from rapidfix.errors.model_file import load_model
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.joint_rbf import JointRBF
+from rapidfix.error_model.model_file import load_model
 
 
 def joint_curves(path, q):

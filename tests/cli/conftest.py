@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rapidfix import pipeline
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.model_file import save_model
 from rapidfix.sim import simulate_cell
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from rapidfix.cli import main
-from rapidfix.errors.joint_rbf import JointRBF, fit_network
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.joint_rbf import JointRBF, fit_network
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import save_model
 from rapidfix.kinematics import load_robot
 
 from .conftest import SAMPLES, one_line_error, run_cli

@@ -19,9 +19,9 @@ import pytest
 
 from rapidfix.demo import measured_range, pick_and_place, run_on_robot
 from rapidfix.diagnose.run import diagnose
-from rapidfix.errors.fit import fit_error_model
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.fit import fit_error_model
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model_file import save_model
 from rapidfix.measure.registration import rigid_fit
 from rapidfix.measure.sweeps import analyse_sweeps
 from rapidfix.postprocess.compensator import Compensator

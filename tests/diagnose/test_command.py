@@ -7,7 +7,7 @@ import pytest
 
 from rapidfix.cli import main
 from rapidfix.demo import demo_loop, format_demo
-from rapidfix.errors.model_file import load_model
+from rapidfix.error_model.model_file import load_model
 
 
 @pytest.fixture(scope="module")

@@ -12,10 +12,10 @@ import warnings
 
 import numpy as np
 
-from rapidfix.errors.candidates.registration import world_to_base
-from rapidfix.errors.compensate import compensate
-from rapidfix.errors.context import Context
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.candidates.registration import world_to_base
+from rapidfix.error_model.compensate import compensate
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
 from rapidfix.sim.plans import point_plan
 from rapidfix.sim.virtual_robot import RunConditions
 

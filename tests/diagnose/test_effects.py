@@ -6,18 +6,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from rapidfix.errors.candidates.backlash import Backlash, last_motion_direction
-from rapidfix.errors.candidates.compliance import JointCompliance, payload_torque_per_kg
-from rapidfix.errors.candidates.coupling import JointCoupling
-from rapidfix.errors.candidates.geometry import LinkGeometry, identifiable_modes
-from rapidfix.errors.candidates.joint_reference import JointReference
-from rapidfix.errors.candidates.registration import TrackerFrame, TrackerScale, world_to_base
-from rapidfix.errors.candidates.thermal import ThermalDrift
-from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.context import Context
-from rapidfix.errors.effects import effect_from_dict
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import load_model, save_model
+from rapidfix.error_model.candidates.backlash import Backlash, last_motion_direction
+from rapidfix.error_model.candidates.compliance import JointCompliance, payload_torque_per_kg
+from rapidfix.error_model.candidates.coupling import JointCoupling
+from rapidfix.error_model.candidates.geometry import LinkGeometry, identifiable_modes
+from rapidfix.error_model.candidates.joint_reference import JointReference
+from rapidfix.error_model.candidates.registration import TrackerFrame, TrackerScale, world_to_base
+from rapidfix.error_model.candidates.thermal import ThermalDrift
+from rapidfix.error_model.candidates.tool_offset import ToolOffset
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import load_model, save_model
+from rapidfix.error_model.registry import effect_from_dict
 from rapidfix.kinematics import load_robot
 
 ROBOT = load_robot("IRB1600-10/1.45")
@@ -44,7 +44,7 @@ def test_payload_torque_matches_lever_arm_at_home():
 
 def test_compliance_deflects_joints_2_and_3_with_the_payload_only():
     eff = JointCompliance(ROBOT.name, BALL, default_payload_kg=2.0)
-    eff.set_params(np.array([1e-6, 2e-6, 0, 0, 0, 0]))
+    eff.set_fitted(np.array([1e-6, 2e-6, 0, 0, 0, 0]))
     q = _poses(5)
     light = eff.joint_delta(q, Context(payload_kg=np.zeros(5)))
     heavy = eff.joint_delta(q, Context(payload_kg=np.full(5, 10.0)))
@@ -73,7 +73,7 @@ def test_motion_direction_is_the_sign_of_the_last_move(steps):
 def test_backlash_is_half_the_play_against_the_motion():
     eff = Backlash()
     play = np.radians([0.02, 0.01, 0.03, 0, 0, 0])
-    eff.set_params(play)
+    eff.set_fitted(play)
     q = np.array([[0.0] * 6, [0.1] * 6, [0.05] * 6])
     delta = eff.joint_delta(q, Context.from_rows(q))
     np.testing.assert_allclose(delta[1], -play / 2)
@@ -83,7 +83,7 @@ def test_backlash_is_half_the_play_against_the_motion():
 
 def test_thermal_drift_scales_the_arm_about_the_base():
     eff = ThermalDrift("temp_c", reference=20.0)
-    eff.set_params(np.array([5.0, 20.0]))  # 5 ppm at 20 °C, 20 ppm/K
+    eff.set_fitted(np.array([5.0, 20.0]))  # 5 ppm at 20 °C, 20 ppm/K
     q = _poses(4)
     temp = np.array([20.0, 22.0, 25.0, 30.0])
     model = ErrorModel(ROBOT.name, [eff])
@@ -95,7 +95,7 @@ def test_thermal_drift_scales_the_arm_about_the_base():
 
 def test_thermal_drift_without_temperature_follows_time_in_hours():
     eff = ThermalDrift("time_s", reference=1800.0)
-    eff.set_params(np.array([0.0, 10.0]))  # 10 ppm per hour
+    eff.set_fitted(np.array([0.0, 10.0]))  # 10 ppm per hour
     q = _poses(3)
     s = eff.scale(q, Context(time_s=np.array([1800.0, 5400.0, 9000.0])))
     np.testing.assert_allclose(s, 1 + 1e-6 * np.array([0.0, 10.0, 20.0]))
@@ -104,7 +104,7 @@ def test_thermal_drift_without_temperature_follows_time_in_hours():
 
 def test_tool_offset_moves_the_ball_with_the_flange():
     eff = ToolOffset()
-    eff.set_params(np.array([0.3, -0.2, 0.1]))
+    eff.set_fitted(np.array([0.3, -0.2, 0.1]))
     q = _poses(6)
     model = ErrorModel(ROBOT.name, [eff])
     moved = model.predict_ball(ROBOT, q, BALL)
@@ -116,7 +116,7 @@ def test_registration_maps_into_the_tracker_and_back():
     R = Rotation.from_euler("zyx", [40, 0.3, -0.2], degrees=True).as_matrix()
     t = np.array([2500.0, -1200.0, 300.0])
     scale = TrackerScale()
-    scale.set_params(np.array([60.0]))
+    scale.set_fitted(np.array([60.0]))
     model = ErrorModel(ROBOT.name, [TrackerFrame.from_pose(R, t), scale])
     q = _poses(5)
     p = model.predict_ball(ROBOT, q, BALL)
@@ -128,7 +128,7 @@ def test_registration_maps_into_the_tracker_and_back():
 
 def test_coupling_moves_only_the_target_joint():
     eff = JointCoupling(source=1, target=2)
-    eff.set_params(np.array([1e-4, -2e-4]))
+    eff.set_fitted(np.array([1e-4, -2e-4]))
     q = _poses(7)
     delta = eff.joint_delta(q, Context())
     np.testing.assert_allclose(delta[:, 2], 1e-4 * np.sin(q[:, 1]) - 2e-4 * np.cos(q[:, 1]))
@@ -160,7 +160,7 @@ def test_every_new_effect_survives_the_model_file(tmp_path):
     ]
     rng = np.random.default_rng(2)
     for eff in effects:
-        eff.set_params(rng.normal(size=len(eff.param_names)) * 1e-3)
+        eff.set_fitted(rng.normal(size=len(eff.param_names)) * 1e-3)
         eff.uncertainty = np.abs(rng.normal(size=len(eff.param_names)))
     model = ErrorModel(ROBOT.name, effects)
     loaded = load_model(save_model(model, tmp_path / "m.json"), ROBOT.name)

@@ -1,6 +1,6 @@
 """The non-parametric fallback (issue #14, section 2): a correction whose cause is unknown.
 
-The simulator (rapidfix.sim, independent of rapidfix.errors) hides a hose that pulls
+The simulator (rapidfix.sim, independent of rapidfix.error_model) hides a hose that pulls
 on joint 5 by A · sin θ4 · sin θ6: smooth, over two joints together, and described by
 no candidate and no single joint × driver. The diagnosis must accept the fallback
 (no physical name), say which joint it acts on and which joints it depends on, end
@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 from rapidfix.diagnose.fallback import cv_errors, farthest_points
-from rapidfix.errors.candidates.rbf_correction import RBFCorrection
-from rapidfix.errors.context import Context
-from rapidfix.errors.effect import effect_from_dict
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.candidates.rbf_correction import RBFCorrection
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.effect import effect_from_dict
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import save_model
 from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
@@ -72,7 +72,7 @@ def _effect(features=("q4", "q6"), lo=(-2.0, -2.5), hi=(2.0, 2.5), seed=0):
     basis = np.linalg.qr(rng.normal(size=(7, 4)))[0]
     eff = RBFCorrection(4, features, lo, hi, centres, 0.6, basis,
                         centring=rng.uniform(0, 0.3, 7), reference=[0.0] * len(features))
-    eff.set_params(rng.normal(0, 1e-4, 4))
+    eff.set_fitted(rng.normal(0, 1e-4, 4))
     return eff
 
 

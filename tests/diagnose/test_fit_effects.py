@@ -3,12 +3,12 @@
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from rapidfix.errors.candidates.compliance import JointCompliance
-from rapidfix.errors.candidates.registration import TrackerFrame
-from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.context import Context
-from rapidfix.errors.fit_effects import MeasuredPoints, fit_free_effects
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.compliance import JointCompliance
+from rapidfix.error_model.candidates.registration import TrackerFrame
+from rapidfix.error_model.candidates.tool_offset import ToolOffset
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.fit_effects import MeasuredPoints, fit_free_effects
+from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import load_robot
 
 ROBOT = load_robot("IRB1600-10/1.45")
@@ -27,9 +27,9 @@ def _truth():
         Rotation.from_euler("z", 130, degrees=True).as_matrix(), np.array([2000.0, 1500.0, -400.0])
     )
     tool = ToolOffset()
-    tool.set_params(np.array([0.25, -0.4, 0.15]))
+    tool.set_fitted(np.array([0.25, -0.4, 0.15]))
     comp = JointCompliance(ROBOT.name, BALL)
-    comp.set_params(np.array([1.2e-6, 0.8e-6, 1e-4, -2e-4, 5e-5, 1e-4]))
+    comp.set_fitted(np.array([1.2e-6, 0.8e-6, 1e-4, -2e-4, 5e-5, 1e-4]))
     return ErrorModel(ROBOT.name, [frame, tool, comp])
 
 
@@ -40,9 +40,9 @@ def test_recovers_known_parameters_from_exact_data():
     start = _truth()
     guess = start.effects[0].params()
     guess[:3] += 1e-3  # a registration a milliradian off, other effects at zero
-    start.effects[0].set_params(guess)
+    start.effects[0].set_fitted(guess)
     for eff in start.effects[1:]:
-        eff.set_params(np.zeros(len(eff.param_names)))
+        eff.set_fitted(np.zeros(len(eff.param_names)))
     fit = fit_free_effects(start, ROBOT, MeasuredPoints(q, xyz, ctx, BALL))
     assert fit.converged
     assert fit.rank == 6 + 3 + 6

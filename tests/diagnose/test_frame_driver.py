@@ -6,12 +6,12 @@ import pytest
 
 from rapidfix.diagnose.features import exposing_feature
 from rapidfix.diagnose.structured import ranking_records, screen, variants
-from rapidfix.errors.candidates.frame_driver import FRAMES, FrameDriver
-from rapidfix.errors.compensate import compensate
-from rapidfix.errors.context import Context
-from rapidfix.errors.fit_effects import MeasuredPoints, predict
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import load_model, save_model
+from rapidfix.error_model.candidates.frame_driver import FRAMES, FrameDriver
+from rapidfix.error_model.compensate import compensate
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.fit_effects import MeasuredPoints, predict
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import load_model, save_model
 from rapidfix.kinematics import load_robot
 from rapidfix.sim import VirtualRobot
 from rapidfix.sim.true_errors import GRAVITY, LINK_MASSES_KG
@@ -32,7 +32,7 @@ def _model_of_the_truth(effect, truth, vr):
         eff = FrameDriver("tool", robot=ROBOT.name, payload_point_mm=vr.smr_offset_mm)
         lever = (truth["tool_cog_mm"] - truth["hinge_mm"]) * 1e-3
         own = truth["k_rad_per_nm"] * truth["tool_kg"] * abs(GRAVITY[2]) * lever
-        eff.set_params(np.array([own, truth["k_rad_per_nm"], truth["hinge_mm"]]))
+        eff.set_fitted(np.array([own, truth["k_rad_per_nm"], truth["hinge_mm"]]))
     elif effect == "base_tilt":
         eff = FrameDriver("base", robot=ROBOT.name, payload_point_mm=vr.smr_offset_mm)
         k = truth["k_rad_per_nm"]
@@ -48,11 +48,11 @@ def _model_of_the_truth(effect, truth, vr):
         p[5:8] = k * (upper[0] * upper[1] + wrist[0] * wrist[1])
         p[8] = k * (upper[0] + wrist[0])
         p[-1] = truth["pivot_depth_mm"]
-        eff.set_params(p)
+        eff.set_fitted(p)
     else:
         eff = FrameDriver("link", robot=ROBOT.name, link=truth["link"],
                           reference=truth["t_ref_c"])
-        eff.set_params(np.array([0.0, 1e6 * truth["alpha_per_k"]]))
+        eff.set_fitted(np.array([0.0, 1e6 * truth["alpha_per_k"]]))
     return eff
 
 
@@ -80,11 +80,11 @@ def test_each_frame_effect_matches_the_simulator(effect):
 
 def _examples():
     tool = FrameDriver("tool", robot=ROBOT.name, payload_point_mm=BALL, default_payload_kg=2.0)
-    tool.set_params(np.array([4e-4, 1.5e-4, 20.0]))
+    tool.set_fitted(np.array([4e-4, 1.5e-4, 20.0]))
     base = FrameDriver("base", robot=ROBOT.name, payload_point_mm=BALL)
-    base.set_params(np.r_[3e-7, np.full(len(base.param_names) - 2, 1e-7), 150.0])
+    base.set_fitted(np.r_[3e-7, np.full(len(base.param_names) - 2, 1e-7), 150.0])
     link = FrameDriver("link", robot=ROBOT.name, link=3, reference=25.0)
-    link.set_params(np.array([5.0, 11.5]))
+    link.set_fitted(np.array([5.0, 11.5]))
     return [tool, base, link]
 
 
@@ -170,7 +170,7 @@ def test_frame_effects_say_where_and_what_drives_them():
                            "perpendicular to its axis")
     assert "150.0 ± 10.0 µrad/N·m" in text and "400 ± 50 µrad under its own weight" in text
     assert "µm/N" in text
-    tool.set_params(np.array([4e-4, 0.0, 0.0]))
+    tool.set_fitted(np.array([4e-4, 0.0, 0.0]))
     tool.uncertainty = np.array([5e-5, 0.0, 3.0])
     assert tool.sentence().endswith(": 400 ± 50 µrad with the tool held horizontal (54 µm at "
                                     "the target ball); the payload did not vary")

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from rapidfix.diagnose.gauges import resolve_flange_gauge
-from rapidfix.errors.fit_effects import predict
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.fit_effects import predict
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
 from rapidfix.postprocess.execute import align_axis1
 from rapidfix.sim.plans import point_plan
 

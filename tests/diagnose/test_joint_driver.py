@@ -6,13 +6,13 @@ import pytest
 
 from rapidfix.diagnose.features import exposing_feature
 from rapidfix.diagnose.structured import screen, variants
-from rapidfix.errors.candidates.gravity import body_torque_regressors, payload_torques
-from rapidfix.errors.candidates.joint_driver import DRIVERS, JointDriver
-from rapidfix.errors.compensate import compensate
-from rapidfix.errors.context import Context
-from rapidfix.errors.fit_effects import MeasuredPoints, predict
-from rapidfix.errors.model import ErrorModel
-from rapidfix.errors.model_file import load_model, save_model
+from rapidfix.error_model.candidates.gravity import body_torque_regressors, payload_torques
+from rapidfix.error_model.candidates.joint_driver import DRIVERS, JointDriver
+from rapidfix.error_model.compensate import compensate
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.fit_effects import MeasuredPoints, predict
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.model_file import load_model, save_model
 from rapidfix.kinematics import load_robot
 from rapidfix.sim.true_errors import torque_about
 
@@ -83,7 +83,7 @@ def test_every_driver_round_trips_through_the_model_file(tmp_path):
     rng = np.random.default_rng(1)
     model = ErrorModel(ROBOT.name)
     for eff in _driver_examples():
-        eff.set_params(rng.normal(size=len(eff.param_names)) * np.asarray(eff.steps) * 50)
+        eff.set_fitted(rng.normal(size=len(eff.param_names)) * np.asarray(eff.steps) * 50)
         model.effects.append(eff)
     loaded = load_model(save_model(model, tmp_path / "m.json"), ROBOT.name)
     np.testing.assert_array_equal(loaded.delta(q, ctx), model.delta(q, ctx))
@@ -96,14 +96,14 @@ def test_each_driver_acts_on_its_joint_only_and_follows_its_driver():
     q = _poses(25, seed=4)
     ctx = _context(q)
     for eff in _driver_examples():
-        eff.set_params(np.ones(len(eff.param_names)) * 1e-4)
+        eff.set_fitted(np.ones(len(eff.param_names)) * 1e-4)
         delta = eff.joint_delta(q, ctx)
         acts = {eff.joint} | ({eff.source} if eff.driver == "angle" else set())
         assert set(np.flatnonzero(np.ptp(delta, axis=0) > 0)) == acts, eff.driver
         assert np.all(np.delete(delta, sorted(acts), axis=1) == 0.0)
     # a direction driver flips with the source joint's last motion, not the joint's own
     eff = JointDriver(4, "direction", source=3)
-    eff.set_params(np.array([1e-4]))
+    eff.set_fitted(np.array([1e-4]))
     d = Context(last_direction=np.array([[1.0, 1, 1, 1, -1, 1], [-1, -1, -1, -1, -1, -1]]))
     np.testing.assert_allclose(eff.joint_delta(np.zeros((2, 6)), d)[:, 4], [1e-4, -1e-4])
 
@@ -114,7 +114,7 @@ def test_a_structured_model_is_compensated_by_the_general_solve():
                   last_direction=np.where(np.arange(72).reshape(12, 6) % 2, 1.0, -1.0))
     model = ErrorModel(ROBOT.name, [e for e in _driver_examples() if e.driver != "time"])
     for eff in model.effects:
-        eff.set_params(np.full(len(eff.param_names), 3e-4) * np.asarray(eff.steps) / 2e-6)
+        eff.set_fitted(np.full(len(eff.param_names), 3e-4) * np.asarray(eff.steps) / 2e-6)
     assert not model.separable
     q_cmd = compensate(model, ROBOT, q_ideal, ctx)
     reached = model.actual_flange(ROBOT, q_cmd, ctx)
@@ -126,7 +126,7 @@ def test_the_screen_ranks_the_hidden_joint_and_driver_first():
     q = _poses(60, seed=6)
     ctx = _context(q)
     truth = ErrorModel(ROBOT.name, [JointDriver(2, "direction", source=4)])
-    truth.effects[0].set_params(np.array([np.radians(0.03)]))
+    truth.effects[0].set_fitted(np.array([np.radians(0.03)]))
     data = MeasuredPoints(q, np.zeros((60, 3)), ctx, BALL)
     xyz = predict(truth, ROBOT, data) + np.random.default_rng(0).normal(0, 0.01, (60, 3))
     data = MeasuredPoints(q, xyz, ctx, BALL)
@@ -152,11 +152,11 @@ def test_the_report_shows_a_structured_effect_against_its_driver():
 
 def test_a_gravity_effect_says_in_words_what_it_was_fitted_from():
     eff = JointDriver(3, "gravity", robot=ROBOT.name)
-    eff.set_params(np.array([3.7e-5, 1e-4, 0, 0, 0, 0, 0, 0]))
+    eff.set_fitted(np.array([3.7e-5, 1e-4, 0, 0, 0, 0, 0, 0]))
     eff.uncertainty = np.full(8, 4e-6)
     assert eff.sentence() == ("joint 4's error grows with the gravity torque about joint 4 "
                               "(payload and carried links): 0.00212 ± 0.00023°/N·m of "
                               "payload torque")
-    eff.set_params(np.array([0.0, 1e-4, 0, 0, 0, 0, 0, 0]))
+    eff.set_fitted(np.array([0.0, 1e-4, 0, 0, 0, 0, 0, 0]))
     eff.uncertainty = np.zeros(8)
     assert "payload did not vary" in eff.sentence()

@@ -1,6 +1,6 @@
 """Acceptance for effects outside the seven candidates (issue #14): traced by joint and driver.
 
-The simulator (rapidfix.sim, independent of rapidfix.errors) hides an effect no
+The simulator (rapidfix.sim, independent of rapidfix.error_model) hides an effect no
 candidate describes: a wrist joint that deflects under the gravity torque of its
 tool and payload, an encoder scale that drifts with the temperature, a joint zero
 that shifts with the direction another joint last moved, a coupling through the

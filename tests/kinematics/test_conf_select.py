@@ -6,7 +6,7 @@ import pytest
 
 from rapidfix.kinematics import IKStatus, available_robots, load_robot
 from rapidfix.kinematics.confdata import conf_matches, select_by_conf, select_nearest
-from rapidfix.kinematics.model import RobotModel
+from rapidfix.kinematics.robot_model import RobotModel
 
 pytestmark = pytest.mark.filterwarnings("error")
 

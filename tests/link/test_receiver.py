@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rapidfix.link.checksum import crc16
-from rapidfix.link.frames import (
+from rapidfix.link.protocol import (
     MAX_PAYLOAD,
     DoneStatus,
     Frame,

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from rapidfix.link import RECEIVER_MODULE
 from rapidfix.link.checksum import crc16
-from rapidfix.link.frames import (
+from rapidfix.link.protocol import (
     BUSY_EVERY,
     MAX_PAYLOAD,
     PROTOCOL_VERSION,

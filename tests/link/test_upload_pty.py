@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from rapidfix.exceptions import LinkError
 from rapidfix.link.faults import LinkFaults
-from rapidfix.link.frames import MAX_PAYLOAD
+from rapidfix.link.protocol import MAX_PAYLOAD
 from rapidfix.link.receiver import temp_name
 from rapidfix.link.simulator import SimulatedController
 from rapidfix.link.uploader import LinkSettings, upload_file

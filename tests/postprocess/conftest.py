@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rapidfix import pipeline
-from rapidfix.errors.model_file import save_model
+from rapidfix.error_model.model_file import save_model
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.sim import VirtualRobot, simulate_cell
 

@@ -18,17 +18,17 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapidfix.errors.candidates.backlash import Backlash
-from rapidfix.errors.candidates.compliance import JointCompliance
-from rapidfix.errors.candidates.coupling import JointCoupling
-from rapidfix.errors.candidates.geometry import N_ERRORS, LinkGeometry
-from rapidfix.errors.candidates.joint_reference import JointReference
-from rapidfix.errors.candidates.registration import TrackerFrame, TrackerScale
-from rapidfix.errors.candidates.thermal import ThermalDrift
-from rapidfix.errors.candidates.tool_offset import ToolOffset
-from rapidfix.errors.effects import registered_effects
-from rapidfix.errors.joint_rbf import OutsideRangeWarning
-from rapidfix.errors.model import ErrorModel
+from rapidfix.error_model.candidates.backlash import Backlash
+from rapidfix.error_model.candidates.compliance import JointCompliance
+from rapidfix.error_model.candidates.coupling import JointCoupling
+from rapidfix.error_model.candidates.geometry import N_ERRORS, LinkGeometry
+from rapidfix.error_model.candidates.joint_reference import JointReference
+from rapidfix.error_model.candidates.registration import TrackerFrame, TrackerScale
+from rapidfix.error_model.candidates.thermal import ThermalDrift
+from rapidfix.error_model.candidates.tool_offset import ToolOffset
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model.registry import registered_effects
 from rapidfix.exceptions import InvalidOption, RapidfixError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
@@ -59,32 +59,32 @@ def _effect(kind: str, rng: np.random.Generator):
     """A random instance of an effect type (every registered type is covered)."""
     if kind == "backlash":
         e = Backlash()
-        e.set_params(rng.uniform(0, np.radians(0.04), 6))
+        e.set_fitted(rng.uniform(0, np.radians(0.04), 6))
     elif kind == "joint_compliance":
         e = JointCompliance(ROBOT.name, (60.0, 80.0, 90.0), 1.0)
-        e.set_params(np.concatenate([rng.uniform(0, 3e-6, 2), rng.normal(0, 1e-4, 4)]))
+        e.set_fitted(np.concatenate([rng.uniform(0, 3e-6, 2), rng.normal(0, 1e-4, 4)]))
     elif kind == "joint_coupling":
         src, dst = rng.choice(6, 2, replace=False)
         e = JointCoupling(int(src), int(dst))
-        e.set_params(rng.normal(0, 2e-4, 2))
+        e.set_fitted(rng.normal(0, 2e-4, 2))
     elif kind == "link_geometry":
         e = LinkGeometry(ROBOT.name, np.eye(N_ERRORS)[:8])
-        e.set_params(rng.normal(0, 1e-4, 8))
+        e.set_fitted(rng.normal(0, 1e-4, 8))
     elif kind == "thermal_drift":
         e = ThermalDrift("temp_c", 21.0)
-        e.set_params(rng.normal(0, 20.0, 2))
+        e.set_fitted(rng.normal(0, 20.0, 2))
     elif kind == "tool_offset":
         e = ToolOffset()
-        e.set_params(rng.normal(0, 0.3, 3))
+        e.set_fitted(rng.normal(0, 0.3, 3))
     elif kind == "tracker_frame":
         e = TrackerFrame()
-        e.set_params(rng.normal(0, 0.01, 6))
+        e.set_fitted(rng.normal(0, 0.01, 6))
     elif kind == "registration":
         e = TrackerScale()
-        e.set_params(rng.normal(0, 30.0, 1))
+        e.set_fitted(rng.normal(0, 30.0, 1))
     elif kind == "joint_reference":
         e = JointReference()
-        e.set_params(rng.normal(0, 1e-4, len(e.param_names)))
+        e.set_fitted(rng.normal(0, 1e-4, len(e.param_names)))
     else:
         return None
     return e
@@ -189,7 +189,7 @@ def test_measurement_effects_never_move_a_program():
                                     _effect("registration", rng)])
     assert model.separable and not model.robot_effects
     q = point_plan(ROBOT, np.zeros(3), 20, seed=2)
-    from rapidfix.errors.compensate import compensate
+    from rapidfix.error_model.compensate import compensate
 
     assert np.array_equal(compensate(model, ROBOT, q), q)
 

@@ -152,10 +152,10 @@ def test_first_move_of_a_loop_keeps_its_line(comp, samples):
     assert result.moves_filtered == 2 and not result.skipped
 
 
-@pytest.mark.filterwarnings("ignore::rapidfix.errors.joint_rbf.OutsideRangeWarning")
+@pytest.mark.filterwarnings("ignore::rapidfix.error_model.joint_rbf.OutsideRangeWarning")
 @pytest.mark.parametrize("step_deg", [0.02, 0.2, 2.0, 10.0])
 def test_the_line_bound_holds_for_joint_moves_the_model_predicts(comp, step_deg):
-    from rapidfix.errors.context import Context
+    from rapidfix.error_model.context import Context
     from rapidfix.postprocess.path import chain_span, line_deviation_bound, wrist_levers
 
     robot, model = comp.robot, comp.model

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from rapidfix.cli import main
-from rapidfix.errors.model_file import load_model
+from rapidfix.error_model.model_file import load_model
 from rapidfix.kinematics import is_shipped, load_robot, parse_robot, read_robot_file
 from rapidfix.sim import simulate_cell
 

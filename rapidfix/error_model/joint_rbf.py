@@ -1,0 +1,407 @@
+"""Per-joint motion error Δθ_j(θ_j) as a Gaussian radial-basis-function network.
+
+The source paper's model: each joint's error (gear transmission error, offset)
+depends on that joint's angle only. One network per joint:
+
+    Δθ(θ) = Σ_k w_k · exp(−(θ − c_k)² / (2σ²)) + a + b·u,   u = (θ − mid) / half-range
+
+Centres c_k are spread evenly over the measured range; the affine part (an
+offset and a scale error, both physical) is not penalised, the Gaussian weights
+are (ridge regression, smoothing λ). Width σ (as a multiple of the centre
+spacing) and λ are chosen by k-fold cross-validation over a grid, with
+interleaved folds, which mimics the real use: predicting between sweep points.
+
+Valid range: the measured range [θ_min, θ_max]. Outside it the policy decides:
+"clamp" (default) evaluates the network at the nearest edge (Δθ constant,
+derivative 0) and warns once per joint with `OutsideRangeWarning`; "refuse"
+raises ModelError naming the joint, the angle and the range.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+import scipy.linalg
+
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.effect import Effect
+from rapidfix.exceptions import ModelError
+
+POLICIES = ("clamp", "refuse")
+#: width grid, as multiples of the centre spacing
+WIDTH_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 9.0, 13.0)
+#: smoothing grid (penalty per data point on the Gaussian weights)
+SMOOTHINGS = (1e-8, 1e-6, 1e-4, 1e-3, 1e-2, 1e-1)
+MAX_CENTRES = 150
+#: valid ranges and widths beyond ±10 turns are not a robot's
+MAX_ABS_ANGLE_RAD = 20.0 * np.pi
+#: angles this close to the range edge count as inside (rad; far below 1e-9°)
+_EDGE_TOL = 1e-12
+
+
+class OutsideRangeWarning(UserWarning):
+    """A joint angle outside the range the model was fitted on was clamped."""
+
+
+@dataclass
+class RBFNetwork:
+    """One joint's network. Angles and errors in radians."""
+
+    centres: np.ndarray
+    width: float
+    lo: float
+    hi: float
+    smoothing: float
+    weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    cv_rms: float | None = None
+
+    @property
+    def n_params(self) -> int:
+        """Gaussian weights plus offset and slope."""
+        return self.centres.shape[0] + 2
+
+    def _u(self, x: np.ndarray) -> np.ndarray:
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        return (x - 0.5 * (self.hi + self.lo)) / half
+
+    def design(self, x: np.ndarray) -> np.ndarray:
+        """Basis matrix (M, K+2) at angles x (M,)."""
+        x = np.asarray(x, dtype=float)
+        d = x[:, None] - self.centres[None, :]
+        gauss = np.exp(-0.5 * (d / self.width) ** 2)
+        return np.column_stack([gauss, np.ones_like(x), self._u(x)])
+
+    def design_derivative(self, x: np.ndarray) -> np.ndarray:
+        """d(basis)/dx (M, K+2)."""
+        x = np.asarray(x, dtype=float)
+        d = x[:, None] - self.centres[None, :]
+        gauss = -d / self.width**2 * np.exp(-0.5 * (d / self.width) ** 2)
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        return np.column_stack([gauss, np.zeros_like(x), np.full_like(x, 1.0 / half)])
+
+    def fit(self, x: np.ndarray, y: np.ndarray) -> RBFNetwork:
+        """Ridge fit of the weights to data (in place); returns self."""
+        self.weights = _ridge_solve(self.design(x), y, self.smoothing, self.centres.shape[0])
+        return self
+
+    def _scaled_offsets(self, x: np.ndarray) -> np.ndarray:
+        """(x - c) / width (M, K), the one large temporary of `value` and `derivative`."""
+        d = np.subtract.outer(x, self.centres)
+        d *= 1.0 / self.width
+        return d
+
+    def value(self, x: np.ndarray) -> np.ndarray:
+        """Δθ at angles already inside the valid range (`design(x) @ weights`, computed
+        in place: this runs on every target of every program)."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        k = self.centres.shape[0]
+        g = self._scaled_offsets(x)
+        np.square(g, out=g)
+        g *= -0.5
+        np.exp(g, out=g)
+        return g @ self.weights[:k] + self.weights[k] + self.weights[k + 1] * self._u(x)
+
+    def derivative(self, x: np.ndarray) -> np.ndarray:
+        """dΔθ/dθ at angles already inside the valid range (`design_derivative(x) @ weights`)."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        k = self.centres.shape[0]
+        d = self._scaled_offsets(x)
+        g = np.square(d)
+        g *= -0.5
+        np.exp(g, out=g)
+        g *= d
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        return -(g @ self.weights[:k]) / self.width + self.weights[k + 1] / half
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data (weights are the effect's parameters and stored there)."""
+        return {
+            "centres_rad": self.centres.tolist(),
+            "width_rad": self.width,
+            "range_rad": [self.lo, self.hi],
+            "smoothing": self.smoothing,
+            "cv_rms_rad": self.cv_rms,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RBFNetwork:
+        """Inverse of to_dict (weights zero until set); ModelError for a malformed network.
+
+        A network as `fit_network` makes it: centres strictly increasing, evenly spaced
+        from one end of the valid range to the other (so a cut array is caught), the
+        range within ±10 turns, a positive width and a non-negative smoothing.
+        """
+        centres = np.asarray(data["centres_rad"], dtype=float)
+        rng = np.asarray(data["range_rad"], dtype=float)
+        if rng.shape != (2,) or not np.all(np.isfinite(rng)) or not rng[0] < rng[1] \
+                or np.max(np.abs(rng)) > MAX_ABS_ANGLE_RAD:
+            raise ModelError(f"range_rad {data['range_rad']!r} is not an interval [lo, hi] "
+                             "within ±10 turns", column="range_rad")
+        lo, hi = float(rng[0]), float(rng[1])
+        if centres.ndim != 1 or not 1 <= centres.shape[0] <= MAX_CENTRES \
+                or not np.all(np.isfinite(centres)):
+            raise ModelError(f"centres_rad must be 1 to {MAX_CENTRES} finite angles",
+                             column="centres_rad")
+        expected = np.linspace(lo, hi, centres.shape[0])
+        if centres.shape[0] > 1 and not np.allclose(centres, expected, rtol=0.0,
+                                                    atol=1e-9 * max(1.0, hi - lo)):
+            raise ModelError(f"centres_rad ({centres.shape[0]} values) do not spread evenly "
+                             f"over range_rad [{lo:.6g}, {hi:.6g}]: a cut or altered array",
+                             column="centres_rad")
+        width, smoothing = float(data["width_rad"]), float(data["smoothing"])
+        if not (np.isfinite(width) and 0.0 < width <= MAX_ABS_ANGLE_RAD):
+            raise ModelError(f"width_rad {width!r} must be a positive angle", column="width_rad")
+        if not (np.isfinite(smoothing) and smoothing >= 0.0):
+            raise ModelError(f"smoothing {smoothing!r} must be finite and not negative",
+                             column="smoothing")
+        net = cls(centres, width, lo, hi, smoothing)
+        net.weights = np.zeros(net.n_params)
+        cv = data.get("cv_rms_rad")
+        net.cv_rms = None if cv is None else float(cv)
+        if net.cv_rms is not None and not (np.isfinite(net.cv_rms) and net.cv_rms >= 0.0):
+            raise ModelError(f"cv_rms_rad {cv!r} must be finite and not negative",
+                             column="cv_rms_rad")
+        return net
+
+
+def _ridge_solve(phi: np.ndarray, y: np.ndarray, smoothing: float, n_gauss: int) -> np.ndarray:
+    """Least squares with penalty smoothing·M on the Gaussian weights (not the affine part)."""
+    m = phi.shape[0]
+    penalty = np.zeros(phi.shape[1])
+    penalty[:n_gauss] = np.sqrt(smoothing * m)
+    a = np.vstack([phi, np.diag(penalty)])
+    b = np.concatenate([y, np.zeros(phi.shape[1])])
+    sol, *_ = scipy.linalg.lstsq(a, b, lapack_driver="gelsd")
+    return sol
+
+
+def _ridge_path(
+    phi: np.ndarray, y: np.ndarray, smoothings: np.ndarray, n_gauss: int, phi_new: np.ndarray
+) -> np.ndarray:
+    """Predictions at phi_new (M', S) of the ridge fits for every smoothing at once.
+
+    Same problem as _ridge_solve. The unpenalised affine columns are projected out
+    (Frisch–Waugh–Lovell), so one eigendecomposition of the Gaussian block serves
+    the whole smoothing path.
+    """
+    m = phi.shape[0]
+    gauss, affine = phi[:, :n_gauss], phi[:, n_gauss:]
+    q, r = np.linalg.qr(affine)
+    g_res = gauss - q @ (q.T @ gauss)
+    y_res = y - q @ (q.T @ y)
+    evals, evecs = scipy.linalg.eigh(g_res.T @ g_res)
+    coef = evecs.T @ (g_res.T @ y_res)
+    w_gauss = evecs @ (coef[:, None] / (np.maximum(evals, 0.0)[:, None]
+                                        + smoothings[None, :] * m))
+    w_affine = scipy.linalg.solve_triangular(r, q.T @ (y[:, None] - gauss @ w_gauss))
+    return phi_new[:, :n_gauss] @ w_gauss + phi_new[:, n_gauss:] @ w_affine
+
+
+def centres_for(x: np.ndarray, max_centres: int = MAX_CENTRES) -> np.ndarray:
+    """Centres spread evenly over the data range: one per distinct angle, at most max_centres."""
+    distinct = np.unique(np.round(np.asarray(x, dtype=float), 12))
+    count = int(min(distinct.shape[0], max_centres))
+    return np.linspace(distinct[0], distinct[-1], count)
+
+
+@dataclass(frozen=True)
+class CVResult:
+    """Cross-validation outcome of one joint: the chosen hyper-parameters and the grid."""
+
+    width_factor: float
+    smoothing: float
+    cv_rms: float
+    grid: np.ndarray  # (len(widths), len(smoothings)) CV RMS, rad
+
+
+def cross_validate(
+    x: np.ndarray,
+    y: np.ndarray,
+    *,
+    width_factors: tuple[float, ...] = WIDTH_FACTORS,
+    smoothings: tuple[float, ...] = SMOOTHINGS,
+    folds: int = 5,
+) -> CVResult:
+    """k-fold CV (interleaved folds along θ) over the width × smoothing grid.
+
+    Among settings within 2 % of the best CV RMS, the widest and then the
+    smoothest wins: the simplest curve that predicts as well.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    # folds by the rank of the distinct angle: repeats of one angle stay together
+    _, rank = np.unique(x, return_inverse=True)
+    fold_of = rank.ravel() % folds
+    centres = centres_for(x)
+    spacing = (centres[-1] - centres[0]) / max(centres.shape[0] - 1, 1) or 1.0
+    grid = np.zeros((len(width_factors), len(smoothings)))
+    lams = np.asarray(smoothings, dtype=float)
+    for i, factor in enumerate(width_factors):
+        net = RBFNetwork(centres, factor * spacing, float(x.min()), float(x.max()), 0.0)
+        phi = net.design(x)
+        sq = np.zeros(len(smoothings))
+        for f in range(folds):
+            test = fold_of == f
+            pred = _ridge_path(phi[~test], y[~test], lams, centres.shape[0], phi[test])
+            sq += np.sum((pred - y[test][:, None]) ** 2, axis=0)
+        grid[i] = np.sqrt(sq / x.shape[0])
+    best = grid.min()
+    ok = grid <= best * 1.02 + 1e-15
+    i_best = max(i for i in range(len(width_factors)) if ok[i].any())
+    k_best = max(k for k in range(len(smoothings)) if ok[i_best, k])
+    return CVResult(width_factors[i_best], smoothings[k_best], float(grid[i_best, k_best]), grid)
+
+
+#: fewest distinct angles a network is fitted to
+MIN_ANGLES = 5
+
+
+def fit_network(x: np.ndarray, y: np.ndarray, *, folds: int = 5) -> tuple[RBFNetwork, CVResult]:
+    """Choose width and smoothing by CV, then fit on all data.
+
+    Fewer distinct angles than MIN_ANGLES is an error; fewer angles than folds
+    is cross-validated leave-one-out.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    distinct = np.unique(x).shape[0]
+    if distinct < MIN_ANGLES:
+        raise ModelError(
+            f"{distinct} distinct measured angles are too few for a cross-validated fit",
+            hint=f"measure at least {MIN_ANGLES} angles (better: 5° steps over the range)",
+        )
+    folds = min(folds, distinct)
+    cv = cross_validate(x, y, folds=folds)
+    centres = centres_for(x)
+    spacing = (centres[-1] - centres[0]) / max(centres.shape[0] - 1, 1) or 1.0
+    net = RBFNetwork(centres, cv.width_factor * spacing, float(x.min()), float(x.max()),
+                     cv.smoothing)
+    net.fit(x, y)
+    net.cv_rms = cv.cv_rms
+    return net, cv
+
+
+class JointRBF(Effect):
+    """The per-joint transmission error: six independent RBF networks (None = not modelled)."""
+
+    type_name: ClassVar[str] = "joint_rbf"
+    separable: ClassVar[bool] = True
+    adds_joint_delta: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        networks: list[RBFNetwork | None] | None = None,
+        name: str | None = None,
+        *,
+        policy: str = "clamp",
+        free: bool = True,
+    ) -> None:
+        super().__init__(name, free=free)
+        if policy not in POLICIES:
+            raise ModelError(f"unknown out-of-range policy {policy!r}", hint="clamp or refuse")
+        self.networks: list[RBFNetwork | None] = list(networks or [None] * 6)
+        self.policy = policy
+        self._warned: set[int] = set()
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """j<J>_w<k>_rad for the Gaussian weights, j<J>_offset_rad, j<J>_slope_rad."""
+        names: list[str] = []
+        for j, net in enumerate(self.networks):
+            if net is None:
+                continue
+            names += [f"j{j + 1}_w{k:03d}_rad" for k in range(net.centres.shape[0])]
+            names += [f"j{j + 1}_offset_rad", f"j{j + 1}_slope_rad"]
+        return tuple(names)
+
+    def params(self) -> np.ndarray:
+        """All networks' weights, joint by joint."""
+        parts = [net.weights for net in self.networks if net is not None]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def set_fitted(self, p: np.ndarray) -> None:
+        """Write the weights back, joint by joint."""
+        p = self._check_length(p)
+        start = 0
+        for net in self.networks:
+            if net is not None:
+                net.weights = p[start : start + net.n_params].copy()
+                start += net.n_params
+
+    def reset_warnings(self) -> None:
+        """Warn again (once per joint) from now on, e.g. for the next file of a batch."""
+        self._warned.clear()
+
+    @property
+    def valid_range(self) -> np.ndarray:
+        """(6, 2) rad; NaN rows for joints without a network."""
+        out = np.full((6, 2), np.nan)
+        for j, net in enumerate(self.networks):
+            if net is not None:
+                out[j] = (net.lo, net.hi)
+        return out
+
+    def _inside(self, j: int, net: RBFNetwork, x: np.ndarray) -> np.ndarray:
+        """x clamped into the valid range, applying the out-of-range policy."""
+        outside = (x < net.lo - _EDGE_TOL) | (x > net.hi + _EDGE_TOL)
+        if outside.any():
+            worst = float(x[outside][np.argmax(np.abs(x[outside] - 0.5 * (net.lo + net.hi)))])
+            message = (
+                f"joint {j + 1} at {np.degrees(worst):.3f}° is outside the range the model was "
+                f"fitted on [{np.degrees(net.lo):.3f}°, {np.degrees(net.hi):.3f}°]"
+            )
+            if self.policy == "refuse":
+                raise ModelError(message, hint="measure that range or use policy 'clamp'")
+            if j not in self._warned:
+                self._warned.add(j)
+                warnings.warn(message + "; the error at the edge is used", OutsideRangeWarning,
+                              stacklevel=3)
+        return np.clip(x, net.lo, net.hi)
+
+    def joint_delta(self, q_cmd: np.ndarray, ctx: Context) -> np.ndarray:
+        """Δθ (N, 6) rad from each joint's network (zero for unmodelled joints)."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        out = np.zeros_like(q)
+        for j, net in enumerate(self.networks):  # six joints, vectorised over poses
+            if net is not None:
+                out[:, j] = net.value(self._inside(j, net, q[:, j]))
+        return out
+
+    def joint_delta_derivative(self, q_cmd: np.ndarray, ctx: Context) -> np.ndarray:
+        """dΔθ_j/dθ_j (N, 6); zero outside the valid range (clamped) and for unmodelled joints."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        out = np.zeros_like(q)
+        for j, net in enumerate(self.networks):
+            if net is not None:
+                x = q[:, j]
+                inside = (x >= net.lo) & (x <= net.hi)
+                out[:, j] = np.where(inside, net.derivative(np.clip(x, net.lo, net.hi)), 0.0)
+        return out
+
+    def _state(self) -> dict[str, Any]:
+        return {
+            "policy": self.policy,
+            "networks": [None if n is None else n.to_dict() for n in self.networks],
+        }
+
+    @classmethod
+    def _from_state(cls, name: str, state: dict[str, Any]) -> JointRBF:
+        nets = state["networks"]
+        if not isinstance(nets, list) or len(nets) != 6:
+            raise ValueError("state.networks must be a list of 6 networks (or null)")
+        networks: list[RBFNetwork | None] = []
+        for j, n in enumerate(nets):
+            try:
+                networks.append(None if n is None else RBFNetwork.from_dict(n))
+            except ModelError as err:
+                raise ModelError(f"joint {j + 1} network: {err.message}",
+                                 column=f"networks[{j}].{err.column}") from None
+        return cls(networks, name, policy=state.get("policy", "clamp"))
+
+    def describe(self) -> str:
+        """One line: which joints are modelled."""
+        joints = [str(j + 1) for j, n in enumerate(self.networks) if n is not None]
+        return f"{self.name} (Gaussian RBF per joint, joints {','.join(joints) or 'none'})"

@@ -1,0 +1,116 @@
+"""The per-joint RBF network: cross-validated width, derivative, valid-range policy."""
+
+import functools
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rapidfix.error_model.context import Context
+from rapidfix.error_model.joint_rbf import JointRBF, OutsideRangeWarning, fit_network
+from rapidfix.exceptions import ModelError
+
+STEP = np.radians(5.0)
+X = np.arange(np.radians(-150.0), np.radians(150.0) + 1e-12, STEP)
+
+
+def _holdout_rms(net, f):
+    x = np.linspace(X[0], X[-1], 2001)
+    return float(np.sqrt(np.mean((net.value(x) - f(x)) ** 2)))
+
+
+def test_cv_prefers_wide_kernels_for_smooth_errors_and_narrow_for_rough():
+    rng = np.random.default_rng(1)
+    noise = np.radians(0.0005)
+
+    def smooth(x):
+        return np.radians(0.03 * np.sin(0.8 * x) + 0.01)
+
+    def rough(x):  # a 30° gear harmonic: 6 samples per period
+        return np.radians(0.02 * np.sin(12.0 * x))
+
+    net_s, cv_s = fit_network(X, smooth(X) + rng.normal(0, noise, X.shape))
+    net_r, cv_r = fit_network(X, rough(X) + rng.normal(0, noise, X.shape))
+    assert cv_s.width_factor > cv_r.width_factor
+    # between the sweep points both predict to about the measurement noise
+    assert _holdout_rms(net_s, smooth) < 1.5 * noise
+    assert _holdout_rms(net_r, rough) < 3.0 * noise
+    # and the CV estimate is an honest estimate of the prediction error (same order)
+    assert cv_r.cv_rms < 5 * noise
+
+
+def test_cv_smooths_pure_noise_to_its_mean():
+    rng = np.random.default_rng(2)
+    y = np.radians(0.01) + rng.normal(0, np.radians(0.002), X.shape)
+    net, cv = fit_network(X, y)
+    x = np.linspace(X[0], X[-1], 500)
+    # a fit that chases the noise would wander by ~0.002°; the chosen one stays near 0.01°
+    assert np.abs(np.degrees(net.value(x)) - 0.01).max() < 0.0015
+    assert cv.smoothing >= 1e-4 or cv.width_factor >= 3.0
+
+
+@functools.cache
+def _wavy_network():
+    rng = np.random.default_rng(3)
+    y = np.radians(0.02 * np.sin(5 * X) + 0.01 * np.cos(2 * X)) + rng.normal(0, 1e-6, X.shape)
+    return fit_network(X, y)[0]
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-149.0, 149.0))
+def test_derivative_matches_finite_difference(theta_deg):
+    net = _wavy_network()
+    x = np.array([np.radians(theta_deg)])
+    h = 1e-6
+    fd = (net.value(x + h) - net.value(x - h)) / (2 * h)
+    assert net.derivative(x) == pytest.approx(fd, rel=1e-5, abs=1e-9)
+
+
+def test_value_and_derivative_are_the_fitted_basis_times_the_weights():
+    # the fit uses the basis matrices, evaluation computes the same sums in place
+    net = _wavy_network()
+    x = np.linspace(X[0], X[-1], 777)
+    np.testing.assert_allclose(net.value(x), net.design(x) @ net.weights, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(net.derivative(x), net.design_derivative(x) @ net.weights,
+                               rtol=1e-12, atol=1e-15)
+
+
+def _effect(policy="clamp"):
+    nets = [None] * 6
+    nets[2], _ = fit_network(X, np.radians(0.01 * np.sin(X) + 0.02))
+    return JointRBF(nets, policy=policy)
+
+
+def test_clamp_policy_uses_the_edge_value_and_warns_once():
+    eff = _effect()
+    q = np.zeros((3, 6))
+    q[:, 2] = [np.radians(170.0), np.radians(200.0), X[-1]]
+    with pytest.warns(OutsideRangeWarning, match="joint 3"):
+        d = eff.joint_delta(q, Context())
+    assert d[0, 2] == pytest.approx(d[2, 2], abs=1e-15)
+    assert d[1, 2] == pytest.approx(d[2, 2], abs=1e-15)
+    assert np.all(eff.joint_delta_derivative(q, Context())[:2, 2] == 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        eff.joint_delta(q, Context())  # second time: no warning
+    # joints without a network contribute nothing
+    assert np.all(d[:, [0, 1, 3, 4, 5]] == 0.0)
+
+
+def test_refuse_policy_raises_model_error_naming_the_joint():
+    eff = _effect("refuse")
+    q = np.zeros((1, 6))
+    q[0, 2] = np.radians(-151.0)
+    with pytest.raises(ModelError, match=r"joint 3 at -151\.000°"):
+        eff.joint_delta(q, Context())
+
+
+def test_too_few_points_is_a_clear_error_and_short_sweeps_still_fit():
+    with pytest.raises(ModelError, match="4 distinct measured angles are too few"):
+        fit_network(X[:4], np.zeros(4))
+    x = np.radians(np.arange(0.0, 61.0, 10.0))  # 7 angles: leave-one-out CV
+    net, _ = fit_network(x, np.radians(0.01 + 0.002 * x))
+    assert np.degrees(net.value(np.radians([25.0]))) == pytest.approx(
+        0.01 + 0.002 * np.radians(25.0), abs=1e-5)
