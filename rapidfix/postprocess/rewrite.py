@@ -805,6 +805,14 @@ def _run_statement(job: _Rewriter, options: RewriteOptions
                      + (f"; {unknown} move(s) start where the program cannot say before run "
                         "time (first move of a routine, loop or branch): taken midway "
                         "between the directions" if unknown else ""))
+    if options.approach:
+        inserted = len(job.approach)
+        record["approach_points"] = str(inserted)
+        if not inserted:
+            notes.append("approach points: none inserted, since "
+                         + ("no joint of the model has play (backlash)" if not np.any(
+                             job.model.play() > 0) else "no compensated MoveJ ends at a "
+                            "fine point"))
     free = cond.config_free & ok
     if free.any():
         other = int(np.count_nonzero(np.any(
