@@ -18,10 +18,10 @@ import pytest
 from rapidfix.diagnose.fallback import cv_errors, farthest_points
 from rapidfix.error_model.candidates.rbf_correction import RBFCorrection
 from rapidfix.error_model.context import Context
-from rapidfix.error_model.effect import effect_from_dict
 from rapidfix.error_model.joint_rbf import OutsideRangeWarning
 from rapidfix.error_model.model import ErrorModel
 from rapidfix.error_model.model_file import save_model
+from rapidfix.error_model.registry import effect_from_dict
 from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import load_robot
 from rapidfix.postprocess.compensator import Compensator
