@@ -95,7 +95,7 @@ class _Emitter:
         self.planned = planned
         self.refined = refined
         #: the targets' plan after path refinement (the joints and conditions to emit)
-        self.plan_ = refined.solved
+        self.solved = refined.solved
         self.editor = Editor(program)
         self.names = NameAllocator(
             texts=[program.text, *(decl_program.text for decl_program in comp.decls)])
@@ -148,7 +148,7 @@ class _Emitter:
 
     def emit(self) -> Expected:
         """All edits (whole statements and declarations); returns what verification must find."""
-        t, p, mode = self.planned.targets, self.plan_, self.refined.mode
+        t, p, mode = self.planned.targets, self.solved, self.refined.mode
         joint_sites = [i for i in sorted(mode) if mode[i] == "joint"]
         filtered_sites = [i for i in sorted(mode) if mode[i] == "filtered"]
         inter = self._intermediates()
@@ -271,7 +271,7 @@ class _Emitter:
         inline in place of an aggregate, else as a new CONST robtarget."""
         if not filtered_sites:
             return
-        t, p = self.planned.targets, self.plan_
+        t, p = self.planned.targets, self.solved
         rows_all = [r for i in filtered_sites for r in self.planned.sites[i].rows]
         rows_a = np.array(rows_all, dtype=int)
         tcp = t.placement.take(rows_a).tcp(self.robot.fk(p.q_cmd[rows_a]))
@@ -340,7 +340,7 @@ class _Emitter:
         t = self.planned.targets
         ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
         placement = t.placement.take(rows)
-        tcp, context = t.pose[rows], self.plan_.context.take(rows)
+        tcp, context = t.pose[rows], self.solved.context.take(rows)
         if self.inter_checks:
             inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
             frames = self.refined.frames.take(seg)
