@@ -67,6 +67,8 @@ def emit_edits(program: Program, comp: Compensator, planned: ProgramPlan,
 
 
 def _stem(site: Site, slot: int) -> str:
+    """The start of a new data name for a target: the robtarget's own name where it has
+    one, else the instruction and its line."""
     motion = site.motion
     operand = site.targets[slot]
     if operand.form == "name" and operand.name:
@@ -83,8 +85,6 @@ def indent_before(program: Program, offset: int) -> str | None:
     return before if before.strip() == "" else None
 
 
-
-
 class _Emitter:
     """The edits being built: names allocated, declarations queued, check units."""
 
@@ -93,6 +93,7 @@ class _Emitter:
         self.program = program
         self.robot = comp.robot
         self.planned = planned
+        self.sites = planned.sites
         self.refined = refined
         #: the targets' plan after path refinement (the joints and conditions to emit)
         self.solved = refined.solved
@@ -154,12 +155,12 @@ class _Emitter:
         inter = self._intermediates()
         segment_of = {site: k for k, site in enumerate(self.refined.sites)}
         # joint literals for all destinations and intermediate points at once
-        dest_rows = np.array([self.planned.sites[i].rows[-1] for i in joint_sites], dtype=int)
+        dest_rows = np.array([self.sites[i].rows[-1] for i in joint_sites], dtype=int)
         inter_sites = [i for i in joint_sites if i in inter]
         r = self.refined.points
         q_parts = [p.q_cmd[dest_rows]] + [r.q_cmd[slice(*inter[i])] for i in inter_sites]
         ext_parts = [t.extax[dest_rows]] + [
-            np.repeat(t.extax[self.planned.sites[i].rows[-1]][None], inter[i][1] - inter[i][0], 0)
+            np.repeat(t.extax[self.sites[i].rows[-1]][None], inter[i][1] - inter[i][0], 0)
             for i in inter_sites]
         literals = jointtarget_literals(np.degrees(np.concatenate(q_parts)),
                                         np.concatenate(ext_parts))
@@ -183,7 +184,7 @@ class _Emitter:
         approach_literal = {}
         if approach:
             keys = list(approach)
-            rows = np.array([self.planned.sites[i].rows[-1] for i in keys], dtype=int)
+            rows = np.array([self.sites[i].rows[-1] for i in keys], dtype=int)
             start = p.q_cmd[rows] - np.array(list(approach.values())) * self.planned.approach_margin
             approach_literal = dict(zip(keys, jointtarget_literals(np.degrees(start),
                                                                    t.extax[rows])))
@@ -197,7 +198,7 @@ class _Emitter:
         statements: list[str] = []
         add_statement = self.units.add_statement
         for i, literal in zip(joint_sites, dest_literal):
-            site = self.planned.sites[i]
+            site = self.sites[i]
             motion = site.motion
             stem = _stem(site, len(site.targets) - 1)
             name = jointtarget_name(stem, literal, site)
@@ -241,7 +242,7 @@ class _Emitter:
     def _emit_joints(self, joint_sites: list[int], literals: list[str]) -> None:
         """`emit`'s loop for moves without intermediate points (a CAM program), in phases
         over all moves: the same names, declarations and statements."""
-        sites = [self.planned.sites[i] for i in joint_sites]
+        sites = [self.sites[i] for i in joint_sites]
         stems = [_stem(site, len(site.targets) - 1) for site in sites]
         keys = list(zip(map(str.lower, stems), literals))
         first: dict[tuple[str, str], int] = {}
@@ -272,7 +273,7 @@ class _Emitter:
         if not filtered_sites:
             return
         t, p = self.planned.targets, self.solved
-        rows_all = [r for i in filtered_sites for r in self.planned.sites[i].rows]
+        rows_all = [r for i in filtered_sites for r in self.sites[i].rows]
         rows_a = np.array(rows_all, dtype=int)
         tcp = t.placement.take(rows_a).tcp(self.robot.fk(p.q_cmd[rows_a]))
         conf = self.robot.confdata(p.q_cmd[rows_a])
@@ -297,7 +298,7 @@ class _Emitter:
                 self.units.add_declaration(decl.module, decl.routine, new)
         names: dict[tuple[str, str], str] = {}
         for i in filtered_sites:
-            site = self.planned.sites[i]
+            site = self.sites[i]
             edits: list[tuple] = []
             for slot, row in enumerate(site.rows):
                 op = t.operand[row]
