@@ -8,12 +8,16 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `plan`         IK on the confdata branch and the compensation solve, vectorised
 - `chain`        where each move starts (the motion executed just before it)
 - `path`         MoveL/MoveC kept within a tolerance when they become joint moves
+- `planning`     a program's plan: targets resolved, solved, compensated (`ProgramPlan`)
+- `refinement`   the paths of the moves made joint moves, refined (`PathRefinement`)
+- `emission`     from plan and refinement to text edits, no file I/O (`Emission`)
 - `naming`       collision-free RAPID identifiers for new data
 - `emission_forms` what the rewrite writes (literals, declarations, MoveAbsJ), fast forms
 - `header`       the header comment, and recognising a compensated program
 - `reparse_changes`  the new statements and declarations, as a program of their own
 - `verify`       re-parse them (in bulk where simple) and predict where the robot will go
-- `rewrite`      one file: the steps above as span edits (`rewrite_file`, `rewrite_source`)
+- `rewrite`      one file: options, result, header, file I/O; runs planning, refinement,
+                 emission and the check (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
 """

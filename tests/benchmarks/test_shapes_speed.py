@@ -123,9 +123,9 @@ def test_rewrite_matrix(model_path, tmp_path):
 
 _PHASES = (  # (label, module attribute path) of rewrite_source's steps, in order
     ("parse + model", "rapidfix.postprocess.rewrite", "parse_program"),
-    ("plan (IK, compensation)", "rapidfix.postprocess.rewrite._Rewriter", "plan"),
-    ("path check", "rapidfix.postprocess.rewrite._Rewriter", "paths"),
-    ("emit (edits)", "rapidfix.postprocess.rewrite._Rewriter", "emit"),
+    ("plan (IK, compensation)", "rapidfix.postprocess.rewrite", "plan_program"),
+    ("path check", "rapidfix.postprocess.rewrite", "refine_paths"),
+    ("emit (edits)", "rapidfix.postprocess.rewrite", "emit_edits"),
     ("run statement", "rapidfix.postprocess.rewrite", "_run_statement"),
     ("read back", "rapidfix.postprocess.rewrite", "read_back"),
     ("predicted deviation", "rapidfix.postprocess.rewrite", "predicted_deviation"),

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from rapidfix.exceptions import RapidSemanticError
+from rapidfix.postprocess import emission as emission_module
 from rapidfix.postprocess import rewrite as rewrite_module
 from rapidfix.postprocess import verify as verify_module
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file, rewrite_source
@@ -143,12 +144,12 @@ def test_the_bulk_reader_reads_scopes_and_arguments():
 
 def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, comp, tmp_path):
     source = SAMPLES / "ballbar.mod"
-    real = rewrite_module.jointtarget_literals
+    real = emission_module.jointtarget_literals
 
     def broken(q_deg, extax):
         return [text[:-1] for text in real(q_deg, extax)]  # drops the closing bracket
 
-    monkeypatch.setattr(rewrite_module, "jointtarget_literals", broken)
+    monkeypatch.setattr(emission_module, "jointtarget_literals", broken)
     out = tmp_path / "out.mod"
     with pytest.raises(RapidSemanticError, match="does not parse"):
         rewrite_file(source, out, comp, RewriteOptions())
@@ -166,7 +167,7 @@ class _NoPointsButTheLoop(dict):
 def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypatch, comp, name):
     data = cam_program(200).encode() if name == "cam" else (SAMPLES / name).read_bytes()
     phased = rewrite_source(data, name, comp, RewriteOptions())
-    monkeypatch.setattr(rewrite_module._Rewriter, "_intermediates",
+    monkeypatch.setattr(emission_module._Emitter, "_intermediates",
                         lambda self: _NoPointsButTheLoop())
     looped = rewrite_source(data, name, comp, RewriteOptions())
     if phased.points_added == 0:

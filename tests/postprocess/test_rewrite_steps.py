@@ -1,0 +1,94 @@
+"""The rewrite's steps run on their own: planning, path refinement and emission each take
+what the step before returned, and together make every edit `rewrite_source` writes but
+its header."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from rapidfix.error_model.candidates.backlash import Backlash
+from rapidfix.error_model.model import ErrorModel
+from rapidfix.kinematics import load_robot
+from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.emission import emit_edits
+from rapidfix.postprocess.header import MARK
+from rapidfix.postprocess.planning import plan_program
+from rapidfix.postprocess.refinement import refine_paths
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.rapid import parse_program
+
+from .conftest import SAMPLES
+
+PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mod", ".prg"))
+#: a header line as the rewrite inserts it (the same pattern --force strips)
+HEADER_LINE = re.compile(rb"\r?\n[ \t]*![ \t]*" + MARK.encode() + rb"[^\r\n]*")
+
+
+def _backlash_comp() -> Compensator:
+    """A model of play only: joints arrive from a side, so refinement follows directions."""
+    robot = load_robot("IRB1600-10/1.45")
+    play = Backlash()
+    play.set_fitted(np.radians([0.02, 0.03, 0.02, 0.01, 0.01, 0.02]))
+    return Compensator(robot, ErrorModel(robot.name, [play]), "backlash.json", "0" * 64)
+
+
+def _steps(data: bytes, name: str, comp: Compensator, options: RewriteOptions):
+    program = parse_program(data, name)
+    planned = plan_program(program, comp, options.emit, approach=options.approach)
+    refined = refine_paths(program, comp.model, comp.robot, planned,
+                           options.path_tolerance_mm, options.emit)
+    return planned, refined, emit_edits(program, comp, planned, refined)
+
+
+@pytest.mark.parametrize("emit", ["jointtargets", "robtargets"])
+@pytest.mark.parametrize("name", PROGRAMS)
+def test_the_steps_make_every_edit_of_the_rewrite_but_its_header(comp, name, emit):
+    data = (SAMPLES / name).read_bytes()
+    options = RewriteOptions(emit=emit)
+    result = rewrite_source(data, name, comp, options)
+    _, refined, emission = _steps(data, name, comp, options)
+    assert emission.editor.render() == HEADER_LINE.sub(b"", result.data)
+    assert refined.points_added() == result.points_added
+    assert emission.inserted == result.inserted
+    assert len(emission.expected.motion) >= result.moves_compensated
+
+
+@pytest.mark.parametrize("name", ["milling.mod", "palletizer.prg", "ballbar.mod"])
+def test_refinement_leaves_the_plan_it_was_given_as_it_was(name):
+    """Directions along refined paths solve some destinations again: the refinement
+    returns them in its own plan, and only destinations of refined moves change."""
+    comp = _backlash_comp()
+    data = (SAMPLES / name).read_bytes()
+    program = parse_program(data, name)
+    planned = plan_program(program, comp, "jointtargets")
+    before = planned.solved.q_cmd.copy()
+    refined = refine_paths(program, comp.model, comp.robot, planned, 0.1, "jointtargets")
+    assert np.array_equal(planned.solved.q_cmd, before)
+    changed = np.flatnonzero((refined.solved.q_cmd != before).any(axis=1))
+    destinations = {planned.sites[i].rows[-1] for i in refined.sites}
+    assert set(changed.tolist()) <= destinations
+    assert refined.direction is not None and len(refined.direction) == len(refined.points.seg)
+    # the rewrite writes the refined plan's joints: what it reads back is where it aims
+    result = rewrite_source(data, name, comp, RewriteOptions())
+    assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
+
+
+def test_approach_points_are_planned_and_emitted_for_fine_movej():
+    """cell.mod with its MoveJ made fine points: each gets a planned arrival direction
+    and one approach point; no MoveL/MoveC does."""
+    comp = _backlash_comp()
+    text = (SAMPLES / "cell.mod").read_text(encoding="utf-8")
+    data = re.sub(r"(MoveJ [^;]*?), z\d+,", r"\1, fine,", text).encode()
+    fine_movej = len(re.findall(rb"MoveJ [^;]*, fine,", data))
+    assert fine_movej == 3
+    planned, refined, emission = _steps(data, "cell.mod", comp, RewriteOptions(approach=True))
+    assert len(planned.approach) == fine_movej
+    assert all(planned.sites[i].kind == "J" for i in planned.approach)
+    play = comp.model.play() > 0
+    assert np.all(planned.approach_margin[play] > 2 * comp.model.play()[play])
+    approach_points = {n for n in emission.inserted if n.endswith("_app")}
+    assert len(approach_points) == sum(refined.mode.get(i) == "joint" for i in planned.approach)
+    assert approach_points
