@@ -96,6 +96,13 @@ def test_dangling_symlink_and_loop_are_failed_rows(cell, samples, tmp_path, caps
 # ---- 12: Ctrl-C stops a parallel batch at once --------------------------------------------
 
 
+def ctrl_c_as_at_a_terminal() -> None:
+    """In the child: Ctrl-C's default disposition. A test run started in the background
+    of a non-interactive shell ignores SIGINT, and a child Python that starts with it
+    ignored never raises KeyboardInterrupt (it respects that, as `nohup` expects)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_stops_a_parallel_batch_and_starts_no_new_file(cell, tmp_path):
     src, out = tmp_path / "in", tmp_path / "out"
     src.mkdir()
@@ -106,7 +113,8 @@ def test_ctrl_c_stops_a_parallel_batch_and_starts_no_new_file(cell, tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-c", "import sys; from rapidfix.cli import main; sys.exit(main())",
          "batch", str(src), str(out), "--model", str(cell["model_path"]), "-j", "2"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=ctrl_c_as_at_a_terminal)
     try:
         while proc.poll() is None and not (out.exists() and list(out.glob("p*.mod"))):
             time.sleep(0.02)  # until the first file is done

@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from .long_program import long_program
+from .test_hard_stops import ctrl_c_as_at_a_terminal
 
 CLI = [sys.executable, "-c", "import sys; from rapidfix.cli import main; sys.exit(main())"]
 MOVES = 4000
@@ -63,7 +64,7 @@ def _temporaries(folder: Path) -> list[Path]:
 
 def _run_and_signal(args: list[str], sig: signal.Signals, delay: float) -> tuple[int, str]:
     proc = subprocess.Popen([*CLI, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                            text=True, env=_env())
+                            text=True, env=_env(), preexec_fn=ctrl_c_as_at_a_terminal)
     end = time.monotonic() + delay
     while proc.poll() is None and time.monotonic() < end:
         time.sleep(0.01)
