@@ -26,13 +26,12 @@ validation points it never fitted.
 from __future__ import annotations
 
 import itertools
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from rapidfix.diagnose.sensitivity import joint_derivatives
+from rapidfix.diagnose.sensitivity import residual_off_model
 from rapidfix.diagnose.structured import MIN_SPREAD
 from rapidfix.error_model.candidates.rbf_correction import (
     CONTEXT_FEATURES,
@@ -42,8 +41,7 @@ from rapidfix.error_model.candidates.rbf_correction import (
     feature_values,
     gaussian_design,
 )
-from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
+from rapidfix.error_model.fit_effects import MeasuredPoints
 from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import RobotModel
 
@@ -138,12 +136,8 @@ def propose(model: ErrorModel, robot: RobotModel, data: MeasuredPoints) -> Propo
     context = _context_features(data)
     pairs = list(itertools.combinations(range(6), 2))
     variants = max(len(targets) * len(pairs) * len(CENTRE_COUNTS) * len(WIDTHS), 1)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutsideRangeWarning)
-        r, jac = jacobian(model, robot, data, model.free_params())
-        grads = joint_derivatives(model, robot, data)
-    basis = np.linalg.qr(jac)[0] if jac.size else np.zeros((r.size, 0))
-    r_perp = r - basis @ (basis.T @ r)
+    res = residual_off_model(model, robot, data)
+    r_perp, grads = res.r_perp, res.grads
     n = len(data)
     settings = []
     best: dict[str, Any] | None = None
@@ -164,7 +158,7 @@ def propose(model: ErrorModel, robot: RobotModel, data: MeasuredPoints) -> Propo
                 phi -= centring
                 cols = np.repeat(phi, 3, axis=0)
                 designs = grads[:, :, None] * cols[None]  # (6, 3N, K): each joint acted on
-                designs -= basis @ (basis.T @ designs)
+                designs = res.off_model(designs)
                 sse = cv_errors(designs, r_perp, n, MAX_PARAMS)
                 for j in targets:
                     m = int(np.argmin(sse[j]))

@@ -7,9 +7,13 @@ every variant.
 
 from __future__ import annotations
 
+import warnings
+from dataclasses import dataclass
+
 import numpy as np
 
-from rapidfix.error_model.fit_effects import MeasuredPoints, predict
+from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian, predict
+from rapidfix.error_model.joint_rbf import OutsideRangeWarning
 from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import RobotModel
 
@@ -27,3 +31,31 @@ def joint_derivatives(model: ErrorModel, robot: RobotModel, data: MeasuredPoints
         moved = data.moved(data.q + dq, ctx)
         out[j] = (predict(model, robot, moved).ravel() - base) / h
     return out
+
+
+@dataclass(frozen=True)
+class ResidualOffModel:
+    """The current model's residual `r` (3N,) on the points, `basis` (3N, k) spanning
+    what its free parameters can still move, `r_perp` the residual off that span, and
+    `grads` (6, 3N) the points' joint derivatives: what a screen regresses on."""
+
+    r: np.ndarray
+    basis: np.ndarray
+    r_perp: np.ndarray
+    grads: np.ndarray
+
+    def off_model(self, cols: np.ndarray) -> np.ndarray:
+        """Columns (3N, m) with the part the model's parameters could fit removed."""
+        return cols - self.basis @ (self.basis.T @ cols)
+
+
+def residual_off_model(model: ErrorModel, robot: RobotModel,
+                       data: MeasuredPoints) -> ResidualOffModel:
+    """The residual a new effect must explain, beyond a refit of the model's own
+    parameters (edge-of-range warnings of the per-joint networks silenced)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutsideRangeWarning)
+        r, jac = jacobian(model, robot, data, model.free_params())
+        grads = joint_derivatives(model, robot, data)
+    basis = np.linalg.qr(jac)[0] if jac.size else np.zeros((r.size, 0))
+    return ResidualOffModel(r, basis, r - basis @ (basis.T @ r), grads)

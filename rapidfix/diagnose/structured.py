@@ -27,13 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.diagnose.sensitivity import joint_derivatives
+from rapidfix.diagnose.sensitivity import residual_off_model
 from rapidfix.error_model.candidates.frame_driver import FrameDriver
 from rapidfix.error_model.candidates.gravity import nominal_robot
 from rapidfix.error_model.candidates.joint_driver import JointDriver
 from rapidfix.error_model.context import last_motion_direction
 from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian, predict
+from rapidfix.error_model.fit_effects import MeasuredPoints, predict
 from rapidfix.error_model.joint_rbf import OutsideRangeWarning
 from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import RobotModel
@@ -132,12 +132,8 @@ def point_columns(model: ErrorModel, robot: RobotModel, data: MeasuredPoints, ef
 def screen(model: ErrorModel, robot: RobotModel, data: MeasuredPoints, default_payload_kg: float
            ) -> list[Screened]:
     """Every variant screened on the current (fitted) model's residual, best first."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", OutsideRangeWarning)
-        r, jac = jacobian(model, robot, data, model.free_params())
-        grads = joint_derivatives(model, robot, data)
-    basis = np.linalg.qr(jac)[0] if jac.size else np.zeros((r.size, 0))
-    r_perp = r - basis @ (basis.T @ r)
+    res = residual_off_model(model, robot, data)
+    r, r_perp, grads = res.r, res.r_perp, res.grads
     rss = float(r_perp @ r_perp) + 1e-300
     n = r.size
     out = []
@@ -151,7 +147,7 @@ def screen(model: ErrorModel, robot: RobotModel, data: MeasuredPoints, default_p
             F = np.repeat(eff.regressors(data.q, data.ctx), 3, axis=0)
             cols = grads[eff.acts_on].T * F
         before = np.linalg.norm(cols, axis=0)
-        cols -= basis @ (basis.T @ cols)
+        cols = res.off_model(cols)
         norms = np.linalg.norm(cols, axis=0)
         fresh = norms > 1e-2 * before  # what the model fits already is not new
         cols = cols[:, fresh] / norms[fresh]

@@ -71,6 +71,15 @@ def _ideal(q_ideal: np.ndarray) -> np.ndarray:
     return q
 
 
+
+def _rows_context(ctx: Context | None, q: np.ndarray) -> Context:
+    """The context of every row of q (N,6), checked for N rows, with the motion
+    directions fixed over all rows before any row is solved on its own."""
+    ctx = EMPTY if ctx is None else ctx
+    ctx.check_rows(q.shape[0])
+    return ctx.with_directions(q)
+
+
 def solve_per_joint(
     model: ErrorModel,
     q_ideal: np.ndarray,
@@ -88,9 +97,7 @@ def solve_per_joint(
     """
     target = _ideal(q_ideal)
     n = target.shape[0]
-    ctx = EMPTY if ctx is None else ctx
-    ctx.check_rows(n)
-    ctx = ctx.with_directions(target)
+    ctx = _rows_context(ctx, target)
     q_cmd = np.empty_like(target)
     step = np.empty_like(target)
     iterations = 0
@@ -155,9 +162,7 @@ def solve_general(
     """
     q_ideal = _ideal(q_ideal)
     n = q_ideal.shape[0]
-    ctx = EMPTY if ctx is None else ctx
-    ctx.check_rows(n)
-    ctx = ctx.with_directions(q_ideal)
+    ctx = _rows_context(ctx, q_ideal)
     tol = np.radians(tol_deg)
     target = robot.fk(q_ideal)
     seed = q_ideal - model.delta(q_ideal, ctx)  # the per-joint answer: a close seed
