@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix import chunks
 from rapidfix.error_model.context import EMPTY, Context
@@ -135,6 +134,8 @@ def _per_joint_newton(
 def _pose_error(target: np.ndarray, current: np.ndarray) -> np.ndarray:
     """Space-frame twist (N, 6) (ω rad, v mm) taking current to target, first order in v."""
     delta = target @ np.linalg.inv(current)
+    from scipy.spatial.transform import Rotation  # when used: start-up time
+
     omega = Rotation.from_matrix(delta[:, :3, :3]).as_rotvec()
     p = delta[:, :3, 3]
     v = p - 0.5 * np.cross(omega, p)

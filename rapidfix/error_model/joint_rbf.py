@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.linalg
 
 from rapidfix.error_model.context import Context
 from rapidfix.error_model.effect import Effect
@@ -174,6 +173,8 @@ def _ridge_solve(phi: np.ndarray, y: np.ndarray, smoothing: float, n_gauss: int)
     penalty[:n_gauss] = np.sqrt(smoothing * m)
     a = np.vstack([phi, np.diag(penalty)])
     b = np.concatenate([y, np.zeros(phi.shape[1])])
+    import scipy.linalg  # when used: start-up time
+
     sol, *_ = scipy.linalg.lstsq(a, b, lapack_driver="gelsd")
     return sol
 
@@ -192,6 +193,8 @@ def _ridge_path(
     q, r = np.linalg.qr(affine)
     g_res = gauss - q @ (q.T @ gauss)
     y_res = y - q @ (q.T @ y)
+    import scipy.linalg  # when used: start-up time
+
     evals, evecs = scipy.linalg.eigh(g_res.T @ g_res)
     coef = evecs.T @ (g_res.T @ y_res)
     w_gauss = evecs @ (coef[:, None] / (np.maximum(evals, 0.0)[:, None]

@@ -2,7 +2,10 @@
 
 Interfaces use mm, degrees and quaternions in ABB order [q1, q2, q3, q4] =
 [w, x, y, z], normalised with q1 ≥ 0. Inside everything is a 4×4 transform in mm.
-scipy's Rotation does the conversions (it stores quaternions as x, y, z, w).
+Quaternion <-> matrix conversions are plain numpy, the same arithmetic in the same
+order as scipy's Rotation (bit for bit, tests compare them), so that a rewrite does
+not import scipy (half a second of start-up); Euler angles and the rare matrix that
+is not orthogonal to round-off go through scipy's Rotation, imported when needed.
 """
 
 from __future__ import annotations
@@ -10,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.screws import invert_transform
@@ -23,12 +25,14 @@ __all__ = [
     "flange_target",
     "invert",
     "matrix_to_quat",
+    "matrix_to_rotvec",
     "offs",
     "pose",
     "pose_to_pos_quat",
     "quat_to_matrix",
     "reltool",
     "rotation_xyz",
+    "rotvec_to_matrix",
     "tcp_pose",
 ]
 
@@ -59,19 +63,126 @@ def canonical_quat(quat: np.ndarray) -> np.ndarray:
     return flat.reshape(q.shape)
 
 
+def _unit_xyzw(q: np.ndarray) -> np.ndarray:
+    """Each [x, y, z, w] row (N, 4) divided by its norm, summed in scipy's order."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    norm = np.sqrt(((x * x + y * y) + z * z) + w * w)
+    return q / norm[:, None]
+
+
+def _xyzw_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of unit [x, y, z, w] quaternions (N, 4)."""
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    m = np.empty((q.shape[0], 3, 3))
+    m[:, 0, 0] = x2 - y2 - z2 + w2
+    m[:, 1, 0] = 2 * (xy + zw)
+    m[:, 2, 0] = 2 * (xz - yw)
+    m[:, 0, 1] = 2 * (xy - zw)
+    m[:, 1, 1] = -x2 + y2 - z2 + w2
+    m[:, 2, 1] = 2 * (yz + xw)
+    m[:, 0, 2] = 2 * (xz + yw)
+    m[:, 1, 2] = 2 * (yz - xw)
+    m[:, 2, 2] = -x2 - y2 + z2 + w2
+    return m
+
+
+#: a matrix farther than this from orthogonal (max |R Rᵀ − I|) is converted by scipy,
+#: which first makes it orthogonal; well below where scipy starts doing so
+_ORTHOGONAL_TOL = 1e-14
+
+
+def _matrix_xyzw(m: np.ndarray) -> np.ndarray:
+    """Unit [x, y, z, w] quaternions (N, 4) of rotation matrices (N, 3, 3), by the
+    largest of the diagonal and the trace (Shepperd's choice, as scipy makes it)."""
+    n = m.shape[0]
+    decision = np.empty((n, 4))
+    decision[:, 0], decision[:, 1], decision[:, 2] = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    decision[:, 3] = (m[:, 0, 0] + m[:, 1, 1]) + m[:, 2, 2]
+    choice = np.argmax(decision, axis=1)
+    q = np.empty((n, 4))
+    for i in range(3):  # the three diagonal cases, each vectorised over its rows
+        rows = np.flatnonzero(choice == i)
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = m[rows]
+        q[rows, i] = 1 - decision[rows, 3] + 2 * s[:, i, i]
+        q[rows, j] = s[:, j, i] + s[:, i, j]
+        q[rows, k] = s[:, k, i] + s[:, i, k]
+        q[rows, 3] = s[:, k, j] - s[:, j, k]
+    rows = np.flatnonzero(choice == 3)
+    s = m[rows]
+    q[rows, 0] = s[:, 2, 1] - s[:, 1, 2]
+    q[rows, 1] = s[:, 0, 2] - s[:, 2, 0]
+    q[rows, 2] = s[:, 1, 0] - s[:, 0, 1]
+    q[rows, 3] = 1 + decision[rows, 3]
+    return _unit_xyzw(q)
+
+
 def quat_to_matrix(quat: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) from [w, x, y, z] quaternions (normalised first)."""
     q = _as_quat(quat)
     xyzw = np.concatenate([q[..., 1:], q[..., :1]], axis=-1).reshape(-1, 4)
-    return Rotation.from_quat(xyzw).as_matrix().reshape((*q.shape[:-1], 3, 3))
+    return _xyzw_matrix(_unit_xyzw(xyzw)).reshape((*q.shape[:-1], 3, 3))
+
+
+def _rotation_xyzw(flat: np.ndarray) -> np.ndarray:
+    """Unit [x, y, z, w] quaternions (N, 4) of matrices (N, 3, 3); a matrix that is not
+    a rotation to round-off goes through scipy (its projection, or its error)."""
+    gram = flat @ np.swapaxes(flat, 1, 2)
+    gram[:, [0, 1, 2], [0, 1, 2]] -= 1.0
+    off = ~(np.abs(gram).max(axis=(1, 2), initial=0.0) <= _ORTHOGONAL_TOL) | ~(
+        np.linalg.det(flat) > 0.0)
+    xyzw = _matrix_xyzw(flat)
+    if off.any():
+        from scipy.spatial.transform import Rotation  # when used: start-up time
+
+        xyzw[off] = Rotation.from_matrix(flat[off]).as_quat()
+    return xyzw
 
 
 def matrix_to_quat(rot: np.ndarray) -> np.ndarray:
     """[w, x, y, z] quaternions (..., 4), unit length with q1 ≥ 0, from rotation matrices."""
     R = np.asarray(rot, dtype=float)
-    xyzw = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat()
+    xyzw = _rotation_xyzw(R.reshape(-1, 3, 3))
     wxyz = np.concatenate([xyzw[:, 3:], xyzw[:, :3]], axis=1)
     return canonical_quat(wxyz).reshape((*R.shape[:-2], 4))
+
+
+#: below this angle (rad) the rotation-vector scale is its Taylor series (as scipy's)
+_SMALL_ANGLE = 1e-3
+
+
+def matrix_to_rotvec(rot: np.ndarray) -> np.ndarray:
+    """Rotation vectors (N, 3) rad, angle in [0, π], of rotation matrices (N, 3, 3)
+    (scipy's `Rotation.from_matrix(rot).as_rotvec()`, the same arithmetic)."""
+    q = _rotation_xyzw(np.asarray(rot, dtype=float).reshape(-1, 3, 3))
+    q = np.where((q[:, 3] < 0)[:, None], -q, q)
+    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    angle = 2 * np.arctan2(np.sqrt((x * x + y * y) + z * z), w)
+    angle2 = angle * angle
+    small = 2 + angle2 / 12 + 7 * angle2 * angle2 / 2880
+    with np.errstate(divide="ignore", invalid="ignore"):
+        large = angle / np.sin(angle / 2)
+    scale = np.where(angle <= _SMALL_ANGLE, small, large)
+    return scale[:, None] * q[:, :3]
+
+
+def rotvec_to_matrix(rotvec: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) rad
+    (scipy's `Rotation.from_rotvec(rotvec).as_matrix()`, the same arithmetic)."""
+    v = np.asarray(rotvec, dtype=float).reshape(-1, 3)
+    x, y, z = v[:, 0], v[:, 1], v[:, 2]
+    angle = np.sqrt((x * x + y * y) + z * z)
+    angle2 = angle * angle
+    small = 0.5 - angle2 / 48 + angle2 * angle2 / 3840
+    with np.errstate(divide="ignore", invalid="ignore"):
+        large = np.sin(angle / 2) / angle
+    scale = np.where(angle <= _SMALL_ANGLE, small, large)
+    q = np.empty((v.shape[0], 4))
+    q[:, :3] = scale[:, None] * v
+    q[:, 3] = np.cos(angle / 2)
+    return _xyzw_matrix(q)
 
 
 def pose(pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
@@ -106,6 +217,8 @@ def rotation_xyz(rx_deg: np.ndarray, ry_deg: np.ndarray, rz_deg: np.ndarray) -> 
         np.broadcast_arrays(*(np.asarray(a, float) for a in (rx_deg, ry_deg, rz_deg))), -1
     )
     flat = angles.reshape(-1, 3)
+    from scipy.spatial.transform import Rotation
+
     return (
         Rotation.from_euler("XYZ", flat, degrees=True)
         .as_matrix()

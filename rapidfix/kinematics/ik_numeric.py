@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 if TYPE_CHECKING:
     from rapidfix.kinematics.robot_model import RobotModel
@@ -26,6 +25,8 @@ def pose_error(T_goal: np.ndarray, T_now: np.ndarray) -> np.ndarray:
     space Jacobian maps joint steps onto it directly.
     """
     R_err = T_goal[:, :3, :3] @ np.swapaxes(T_now[:, :3, :3], 1, 2)
+    from scipy.spatial.transform import Rotation  # when used: start-up time
+
     omega = Rotation.from_matrix(R_err).as_rotvec()
     dp = T_goal[:, :3, 3] - T_now[:, :3, 3]
     v = dp - np.cross(omega, T_now[:, :3, 3])

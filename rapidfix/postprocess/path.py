@@ -19,9 +19,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix import chunks
+from rapidfix.kinematics.frames import matrix_to_rotvec, rotvec_to_matrix
 
 #: interior fractions of an interval where its deviation is sampled
 SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, 7)[1:-1]
@@ -77,12 +77,20 @@ class Curves:
         v = np.cross(nrm, u)
         rel_b = b - centre
         sweep = np.mod(np.arctan2(np.sum(rel_b * v, axis=1), np.sum(rel_b * u, axis=1)), 2 * np.pi)
-        # the turn from the start to the end orientation: R_a^T R_b, in the start's frame
-        rot_a = self.start[:, :3, :3]
-        rel = Rotation.from_matrix(np.swapaxes(rot_a, 1, 2) @ self.end[:, :3, :3]).as_rotvec()
         object.__setattr__(self, "_arc", arc)
         object.__setattr__(self, "_geom", (centre, radius, u, v, nrm, sweep))
-        object.__setattr__(self, "_rot", (self.start[:, :3, :3], rel))
+        object.__setattr__(self, "_rel", None)
+
+    def _turns(self) -> np.ndarray:
+        """(M,3) rotation vectors of the turn from each start to its end orientation,
+        R_a^T R_b in the start's frame; made when a pose along a path is first asked
+        for (a path the curvature bound settles needs none, nor scipy)."""
+        rel = self._rel  # type: ignore[attr-defined]
+        if rel is None:
+            rot_a = self.start[:, :3, :3]
+            rel = matrix_to_rotvec(np.swapaxes(rot_a, 1, 2) @ self.end[:, :3, :3])
+            object.__setattr__(self, "_rel", rel)
+        return rel
 
     @property
     def degenerate(self) -> np.ndarray:
@@ -100,9 +108,9 @@ class Curves:
 
     def poses(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP poses (K,4,4): positions along the curve, orientation by slerp."""
-        rot_a, rel = (g[seg] for g in self._rot)  # type: ignore[attr-defined]
+        rot_a, rel = self.start[seg, :3, :3], self._turns()[seg]
         out = np.zeros((seg.shape[0], 4, 4))
-        out[:, :3, :3] = rot_a @ Rotation.from_rotvec(s[:, None] * rel).as_matrix()
+        out[:, :3, :3] = rot_a @ rotvec_to_matrix(s[:, None] * rel)
         out[:, :3, 3] = self.positions(seg, s)
         out[:, 3, 3] = 1.0
         return out

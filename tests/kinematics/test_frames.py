@@ -110,3 +110,54 @@ def test_unresolvable_work_objects_are_errors():
         frames.flange_target(np.eye(4), None, moving)
     with pytest.raises(KinematicsError):
         frames.flange_target(np.eye(4), frames.Tool(robhold=True), frames.WorkObject(robhold=True))
+
+
+def _random_rotations(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Rotation vectors (n, 3) of every size, from none through tiny (the Taylor
+    branch) to half turns."""
+    v = rng.normal(size=(n, 3))
+    sizes = np.concatenate([np.zeros(4), 10.0 ** rng.uniform(-9, -2.5, n // 3),
+                            rng.uniform(0.0, np.pi, n - 4 - n // 3)])
+    return v / np.linalg.norm(v, axis=1)[:, None] * sizes[:, None]
+
+
+def test_conversions_are_scipys_bit_for_bit():
+    """The numpy conversions are scipy's Rotation, the same arithmetic: equal to the last
+    bit on quaternions of any scale, rotation vectors of any size, and matrices that
+    are products of rotations (orthogonal to round-off)."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(11)
+    wxyz = rng.normal(size=(20000, 4)) * 10.0 ** rng.uniform(-3, 3, (20000, 1))
+    wxyz[:50, 1:] = 0.0  # identity and half turns about the axes
+    wxyz[50:100, 0] = 0.0
+    unit = wxyz / np.linalg.norm(wxyz, axis=1)[:, None]  # as quat_to_matrix takes them
+    unit = np.concatenate([unit[:, 1:], unit[:, :1]], axis=1)
+    assert np.array_equal(frames.quat_to_matrix(wxyz), Rotation.from_quat(unit).as_matrix())
+
+    rotvec = _random_rotations(rng, 20000)
+    m = frames.rotvec_to_matrix(rotvec)
+    assert np.array_equal(m, Rotation.from_rotvec(rotvec).as_matrix())
+    product = m @ frames.rotvec_to_matrix(rotvec[::-1]) @ m
+    assert np.array_equal(frames.matrix_to_rotvec(product),
+                          Rotation.from_matrix(product).as_rotvec())
+    reference = Rotation.from_matrix(product).as_quat()
+    expected = frames.canonical_quat(np.concatenate([reference[:, 3:], reference[:, :3]], 1))
+    assert np.array_equal(frames.matrix_to_quat(product), expected)
+    # back and forth: the rotation vector comes back (to round-off)
+    assert np.allclose(frames.matrix_to_rotvec(m), rotvec, atol=1e-12)
+
+
+def test_a_matrix_off_orthogonal_is_made_a_rotation_first():
+    """A matrix far from orthogonal is not read by its diagonal alone: scipy projects it
+    onto the nearest rotation, as before; a reflection is refused as before."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(12)
+    m = frames.rotvec_to_matrix(_random_rotations(rng, 200))
+    skewed = m + rng.normal(size=m.shape) * 1e-6
+    assert np.array_equal(frames.matrix_to_rotvec(skewed),
+                          Rotation.from_matrix(skewed).as_rotvec())
+    assert np.allclose(frames.matrix_to_rotvec(skewed), frames.matrix_to_rotvec(m), atol=1e-5)
+    with pytest.raises(ValueError):
+        frames.matrix_to_quat(np.diag([1.0, 1.0, -1.0]))

@@ -32,7 +32,6 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix.error_model.candidates.gravity import (
     DOWN,
@@ -65,6 +64,8 @@ Z = np.array([0.0, 0.0, 1.0])
 
 def _rotations(omega: np.ndarray) -> np.ndarray:
     """Rotation matrices (N, 3, 3) of rotation vectors (N, 3)."""
+    from scipy.spatial.transform import Rotation  # when used: start-up time
+
     return Rotation.from_rotvec(omega).as_matrix()
 
 

@@ -24,7 +24,6 @@ from functools import lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix.error_model.candidates.vector import VectorEffect
 from rapidfix.error_model.context import Context
@@ -73,6 +72,8 @@ def perturb(geometry: Geometry, robot: str, e: np.ndarray) -> Geometry:
     points = geometry.axis_points + d_point
     home = np.array(geometry.home, dtype=float, copy=True)
     home[..., :3, 3] += e[20:23]
+    from scipy.spatial.transform import Rotation  # when used: start-up time
+
     home[..., :3, :3] = Rotation.from_rotvec(e[23:26]).as_matrix() @ home[..., :3, :3]
     return geometry.replaced(axis_dirs=dirs, axis_points=points, home=home)
 

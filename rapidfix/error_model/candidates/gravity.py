@@ -15,7 +15,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix.kinematics import RobotModel, load_robot
 
@@ -41,6 +40,8 @@ def link_transforms(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.nd
     R = np.broadcast_to(np.eye(3), (n, 3, 3))
     t = np.zeros((n, 3))
     for j in range(6):  # six joints, each vectorised over the poses
+        from scipy.spatial.transform import Rotation  # when used: start-up time
+
         Rj = Rotation.from_rotvec(q[:, [j]] * dirs[j]).as_matrix()
         tj = points[j] - Rj @ points[j]  # a turn about the axis through points[j]
         t = np.einsum("nij,nj->ni", R, tj) + t

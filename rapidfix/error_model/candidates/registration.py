@@ -13,7 +13,6 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from rapidfix.error_model.candidates.vector import VectorEffect
 from rapidfix.error_model.context import Context
@@ -36,6 +35,8 @@ class TrackerFrame(VectorEffect):
     def from_pose(cls, R: np.ndarray, t: np.ndarray, name: str | None = None) -> TrackerFrame:
         """A frame effect holding p_tracker = R p + t."""
         eff = cls(name)
+        from scipy.spatial.transform import Rotation  # when used: start-up time
+
         rotvec = Rotation.from_matrix(np.asarray(R, dtype=float)).as_rotvec()
         eff.set_fitted(np.concatenate([rotvec, np.asarray(t, dtype=float)]))
         return eff
@@ -43,6 +44,8 @@ class TrackerFrame(VectorEffect):
     def matrix(self) -> np.ndarray:
         """The (4, 4) rigid transform base → tracker."""
         T = np.eye(4)
+        from scipy.spatial.transform import Rotation  # when used: start-up time
+
         T[:3, :3] = Rotation.from_rotvec(self._p[:3]).as_matrix()
         T[:3, 3] = self._p[3:]
         return T
