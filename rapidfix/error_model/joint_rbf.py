@@ -19,8 +19,15 @@ raises ModelError naming the joint, the angle and the range.
 
 from __future__ import annotations
 
+import importlib.util
+import os
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
+from functools import lru_cache
+from types import ModuleType
 from typing import Any, ClassVar
 
 import numpy as np
@@ -39,6 +46,41 @@ MAX_CENTRES = 150
 MAX_ABS_ANGLE_RAD = 20.0 * np.pi
 #: angles this close to the range edge count as inside (rad; far below 1e-9°)
 _EDGE_TOL = 1e-12
+
+
+#: batches smaller than this stay in numpy (a kernel call has a fixed cost)
+_COMPILED_FROM = 64
+_COMPILED: ContextVar[bool] = ContextVar("rapidfix_rbf_compiled", default=False)
+
+
+@contextmanager
+def compiled_sums() -> Iterator[None]:
+    """Inside the block, networks evaluate their Gaussian sums with the compiled kernel
+    when numba is installed (`rbf_compiled`: the same sums to rounding, several times
+    faster). The post-processor turns it on: what it writes is rounded far above that
+    level. Outside, the sums are numpy's, so a fitted or diagnosed model file is the
+    same bytes with or without numba."""
+    token = _COMPILED.set(True)
+    try:
+        yield
+    finally:
+        _COMPILED.reset(token)
+
+
+@lru_cache(maxsize=1)
+def _kernel() -> ModuleType | None:
+    """The compiled Gaussian sums (`rbf_compiled`), or None: numba not installed, or
+    RAPIDFIX_IK_BACKEND=numpy (the environment variable that keeps the IK in numpy
+    keeps these sums there too)."""
+    if os.environ.get("RAPIDFIX_IK_BACKEND", "").strip().lower() == "numpy":
+        return None
+    if importlib.util.find_spec("numba") is None:
+        return None
+    try:
+        from rapidfix.error_model import rbf_compiled
+    except ImportError:  # e.g. a numba built for another numpy
+        return None
+    return rbf_compiled
 
 
 class OutsideRangeWarning(UserWarning):
@@ -92,11 +134,35 @@ class RBFNetwork:
         d *= 1.0 / self.width
         return d
 
+    def _compiled_sums(self, x: np.ndarray, slope: bool) -> np.ndarray | None:
+        """Σ w_k g_k (slope: Σ w_k g_k d_k) by the compiled kernel, or None without it."""
+        if x.shape[0] < _COMPILED_FROM or not _COMPILED.get():
+            return None
+        kernel = _kernel()
+        if kernel is None:
+            return None
+        known = self.__dict__.get("_spacing")  # (centres it was made for, copy, even)
+        if known is None or known[0] is not self.centres:
+            c = np.ascontiguousarray(self.centres, dtype=float)
+            known = self.__dict__["_spacing"] = (self.centres, c, kernel.evenly_spaced(c))
+        _, c, even = known
+        k = c.shape[0]
+        step = (c[-1] - c[0]) / max(k - 1, 1) / self.width
+        out = np.empty(x.shape[0])
+        kernel.gaussian_sums(np.ascontiguousarray(x), c, 1.0 / self.width,
+                             np.ascontiguousarray(self.weights[:k], dtype=float), step,
+                             even, slope, out)
+        return out
+
     def value(self, x: np.ndarray) -> np.ndarray:
         """Δθ at angles already inside the valid range (`design(x) @ weights`, computed
-        in place: this runs on every target of every program)."""
+        in place: this runs on every target of every program; compiled inside
+        `compiled_sums`, see `rbf_compiled`)."""
         x = np.ravel(np.asarray(x, dtype=float))
         k = self.centres.shape[0]
+        sums = self._compiled_sums(x, slope=False)
+        if sums is not None:
+            return sums + self.weights[k] + self.weights[k + 1] * self._u(x)
         g = self._scaled_offsets(x)
         np.square(g, out=g)
         g *= -0.5
@@ -107,12 +173,15 @@ class RBFNetwork:
         """dΔθ/dθ at angles already inside the valid range (`design_derivative(x) @ weights`)."""
         x = np.ravel(np.asarray(x, dtype=float))
         k = self.centres.shape[0]
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        sums = self._compiled_sums(x, slope=True)
+        if sums is not None:
+            return -sums / self.width + self.weights[k + 1] / half
         d = self._scaled_offsets(x)
         g = np.square(d)
         g *= -0.5
         np.exp(g, out=g)
         g *= d
-        half = max(0.5 * (self.hi - self.lo), 1e-12)
         return -(g @ self.weights[:k]) / self.width + self.weights[k + 1] / half
 
     def to_dict(self) -> dict[str, Any]:

@@ -34,6 +34,7 @@ import numpy as np
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.digest import sha256_bytes
+from rapidfix.error_model.joint_rbf import compiled_sums
 from rapidfix.exceptions import (
     InvalidOption,
     OutputExistsError,
@@ -289,7 +290,7 @@ def rewrite_source(
     data: bytes, filename: str, comp: Compensator, options: RewriteOptions
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done."""
-    with cyclic_gc_paused():
+    with cyclic_gc_paused(), compiled_sums():
         return _rewrite(data, filename, comp, options)
 
 

@@ -114,3 +114,35 @@ def test_too_few_points_is_a_clear_error_and_short_sweeps_still_fit():
     net, _ = fit_network(x, np.radians(0.01 + 0.002 * x))
     assert np.degrees(net.value(np.radians([25.0]))) == pytest.approx(
         0.01 + 0.002 * np.radians(25.0), abs=1e-5)
+
+
+@pytest.mark.parametrize("factor", [0.5, 1.0, 4.0, 13.0])
+@pytest.mark.parametrize("spacing", ["even", "uneven"])
+def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing):
+    """Inside `compiled_sums` (the post-processor) the Gaussian sums run compiled when
+    numba is installed: products along evenly spaced centres, or one exp per term where
+    the centres are not even. Either way they are the basis matrix times the weights to
+    rounding, for narrow and wide Gaussians, at the ends of the range and between."""
+    from rapidfix.error_model.joint_rbf import RBFNetwork, compiled_sums
+
+    rng = np.random.default_rng(7)
+    centres = np.linspace(-2.5, 2.8, 120)
+    if spacing == "uneven":
+        centres = centres + rng.uniform(-1e-3, 1e-3, centres.size) * (centres[1] - centres[0])
+    net = RBFNetwork(centres, factor * (centres[1] - centres[0]), -2.5, 2.8, 1e-4)
+    net.weights = rng.normal(size=net.n_params) * 1e-3
+    x = np.concatenate([[-2.5, 2.8], centres[:5], rng.uniform(-2.5, 2.8, 3000)])
+    with compiled_sums():
+        value, slope = net.value(x), net.derivative(x)
+    scale = np.abs(net.weights).sum()
+    np.testing.assert_allclose(value, net.design(x) @ net.weights, rtol=0, atol=1e-13 * scale)
+    np.testing.assert_allclose(slope, net.design_derivative(x) @ net.weights, rtol=0,
+                               atol=1e-13 * scale / net.width)
+    # outside the block: numpy's sums, exactly as before
+    assert np.array_equal(net.value(x), _numpy_value(net, x))
+
+
+def _numpy_value(net, x):
+    k = net.centres.shape[0]
+    g = np.exp(-0.5 * np.square(np.subtract.outer(x, net.centres) * (1.0 / net.width)))
+    return g @ net.weights[:k] + net.weights[k] + net.weights[k + 1] * net._u(x)
