@@ -26,7 +26,7 @@ from rapidfix.postprocess.emission_forms import (
     robtarget_literals,
     statement_variant,
 )
-from rapidfix.postprocess.naming import NameAllocator, identifier_counts
+from rapidfix.postprocess.naming import NameAllocator, count_identifiers
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.planning import ProgramPlan
 from rapidfix.postprocess.refinement import PathRefinement
@@ -283,7 +283,8 @@ class _Emitter:
             op = t.operand[row]
             if op.form == "name" and op.declaration is not None:
                 by_decl.setdefault(id(op.declaration), []).append(row)
-        uses = identifier_counts(self.program.text)
+        uses = count_identifiers(self.program.text, {
+            t.operand[rows[0]].declaration.key for rows in by_decl.values()}) if by_decl else {}
         replaced: set[int] = set()
         for rows in by_decl.values():
             decl = t.operand[rows[0]].declaration

@@ -70,3 +70,20 @@ def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, ste
     many = NameAllocator(texts=[text])
     assert many.allocate_many(stems, prefix) == [one.allocate(s, prefix) for s in stems]
     assert many.allocate("p1", prefix) == one.allocate("p1", prefix)
+
+
+def test_counting_a_few_names_agrees_with_counting_every_word():
+    """`count_identifiers` searches for the names it is asked about; on random texts of
+    letters, digits, underscores and separators it gives the counts of the full
+    word-by-word count (words after digits or underscores, words inside words)."""
+    import random
+
+    from rapidfix.postprocess.naming import count_identifiers, identifier_counts
+
+    rng = random.Random(5)
+    for _ in range(2000):
+        text = "".join(rng.choice("abAB_19 ,;\n!xé") for _ in range(rng.randint(0, 60)))
+        counts = identifier_counts(text)
+        names = [*list(counts)[:4], "ab", "a", "b_1", "x", "ba"]
+        got = count_identifiers(text, names)
+        assert got == {name: counts.get(name, 0) for name in names}, text
