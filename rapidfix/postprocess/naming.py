@@ -37,16 +37,21 @@ _WORD_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ012
 _LETTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ")
 
 
+#: above this many names one count of every word is quicker than a search for each
+_SEARCHED_NAMES = 8
+
+
 def count_identifiers(text: str, names: Iterable[str]) -> dict[str, int]:
     """`identifier_counts(text)[name]` for a few lower-case `names` only: each name is
     searched for, not every word of the text counted (a large program holds millions).
 
     A place where the name stands counts when a word of `IDENTIFIER.findall` starts
     there (a letter, with no letter in the run of word characters before it) and ends
-    there (no word character after it). Text that is not ASCII is counted word by word.
+    there (no word character after it). Text that is not ASCII, or more than
+    `_SEARCHED_NAMES` names (each search reads the whole text), are counted word by word.
     """
     wanted = set(names)
-    if not text.isascii():
+    if len(wanted) > _SEARCHED_NAMES or not text.isascii():
         counts = identifier_counts(text)
         return {name: counts.get(name, 0) for name in wanted}
     lowered = text.lower()

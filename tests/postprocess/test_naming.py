@@ -84,6 +84,6 @@ def test_counting_a_few_names_agrees_with_counting_every_word():
     for _ in range(2000):
         text = "".join(rng.choice("abAB_19 ,;\n!xé") for _ in range(rng.randint(0, 60)))
         counts = identifier_counts(text)
-        names = [*list(counts)[:4], "ab", "a", "b_1", "x", "ba"]
-        got = count_identifiers(text, names)
-        assert got == {name: counts.get(name, 0) for name in names}, text
+        for names in (["ab", "a", "b_1", "x", "ba"], [*counts, "ab", "a", "b_1", "x", "ba"]):
+            got = count_identifiers(text, names)  # a few names searched, many counted
+            assert got == {name: counts.get(name, 0) for name in names}, text
