@@ -202,11 +202,12 @@ class _Emitter:
             motion = site.motion
             stem = _stem(site, len(site.targets) - 1)
             name = jointtarget_name(stem, literal, site)
-            indent = indent_before(self.program, motion.syntax.start)
-            sep = "\n" + indent if indent is not None else " "
-            drops = [(op.argument.start, op.argument.end, "")
-                     for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
             lines = []
+            if i in inter or i in approach:  # points inserted before the move
+                indent = indent_before(self.program, motion.syntax.start)
+                sep = "\n" + indent if indent is not None else " "
+                drops = [(op.argument.start, op.argument.end, "")
+                         for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
             if i in inter:
                 lo, hi = inter[i]
                 zone = motion.zone
