@@ -341,14 +341,19 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         editor.insert(program.modules[0].header_end, header.render(
             _module_indent(program), "\n"))
         units.comments.extend(header.lines())
+    moves_total, inserted = len(planned.sites), emission.inserted
+    before = _predicted_before(comp, planned.targets, refined.solved)
     output = editor.render()
+    # the program model, the plan and the edits are done with: let the read-back's
+    # parse reuse their memory (the largest program's peak is here)
+    del program, planned, refined, emission, editor
     read = read_back(units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
     worst = float(deviation.max()) if deviation.size else None
     return RewriteResult(
         filename=filename,
         data=output,
-        moves_total=len(planned.sites),
+        moves_total=moves_total,
         moves_compensated=compensated,
         moves_filtered=filtered,
         points_added=points,
@@ -356,10 +361,10 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         worst_predicted_mm=worst,
         worst_path_mm=worst_path,
         header=header,
-        inserted=emission.inserted,
+        inserted=inserted,
         notes=notes,
         warnings=warnings,
-        predicted_before_mm=_predicted_before(comp, planned.targets, refined.solved),
+        predicted_before_mm=before,
         filtered_reasons=filtered_reasons,
     )
 
