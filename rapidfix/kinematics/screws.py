@@ -7,9 +7,49 @@ works on batches: angles of shape (N,) and axes broadcast against them.
 
 from __future__ import annotations
 
+import importlib.util
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from functools import lru_cache
+from types import ModuleType
+
 import numpy as np
 
 from rapidfix import chunks
+
+#: batches smaller than this stay in numpy (a kernel call has a fixed cost)
+_COMPILED_FROM = 64
+_COMPILED: ContextVar[bool] = ContextVar("rapidfix_fk_compiled", default=False)
+
+
+@contextmanager
+def compiled_forward() -> Iterator[None]:
+    """Inside the block, `forward_pose` runs the compiled kernel (`fk_compiled`) when numba
+    is installed: the same poses to rounding, several times faster. The post-processor
+    turns it on (what it writes is rounded far above that level); outside, the poses are
+    numpy's, so a fit or a diagnosis gives the same numbers with or without numba."""
+    token = _COMPILED.set(True)
+    try:
+        yield
+    finally:
+        _COMPILED.reset(token)
+
+
+@lru_cache(maxsize=1)
+def _kernel() -> ModuleType | None:
+    """The compiled product of exponentials, or None: numba not installed, or
+    RAPIDFIX_IK_BACKEND=numpy (which keeps all the kinematics in numpy)."""
+    if os.environ.get("RAPIDFIX_IK_BACKEND", "").strip().lower() == "numpy":
+        return None
+    if importlib.util.find_spec("numba") is None:
+        return None
+    try:
+        from rapidfix.kinematics import fk_compiled
+    except ImportError:  # e.g. a numba built for another numpy
+        return None
+    return fk_compiled
 
 
 def rotation_about(w: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -92,10 +132,18 @@ def product_of_exponentials(
 def forward_pose(
     axis_dirs: np.ndarray, axis_points: np.ndarray, home: np.ndarray, q: np.ndarray
 ) -> np.ndarray:
-    """The tool pose (N, 4, 4) of `product_of_exponentials`, without the prefix products."""
+    """The tool pose (N, 4, 4) of `product_of_exponentials`, without the prefix products
+    (compiled inside `compiled_forward`)."""
     q = np.asarray(q, dtype=float)
     count = q.shape[0]
     out = np.empty((count, 4, 4))
+    kernel = _kernel() if count >= _COMPILED_FROM and _COMPILED.get() else None
+    if kernel is not None and q.ndim == 2 and np.ndim(axis_dirs) == 2:
+        kernel.forward_poses(np.ascontiguousarray(axis_dirs, dtype=float),
+                             np.ascontiguousarray(axis_points, dtype=float),
+                             np.ascontiguousarray(home, dtype=float),
+                             np.ascontiguousarray(q), out)
+        return out
     for start in range(0, count, chunks.FK):
         rows = slice(start, start + chunks.FK)
         out[rows] = _chain(axis_dirs, axis_points, q[rows], None) @ home

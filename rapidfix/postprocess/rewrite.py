@@ -41,6 +41,7 @@ from rapidfix.exceptions import (
     RapidSemanticError,
 )
 from rapidfix.gc_pause import cyclic_gc_paused
+from rapidfix.kinematics.screws import compiled_forward
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission import emit_edits, indent_before
 from rapidfix.postprocess.header import MARK, Header, read_header
@@ -290,7 +291,7 @@ def rewrite_source(
     data: bytes, filename: str, comp: Compensator, options: RewriteOptions
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done."""
-    with cyclic_gc_paused(), compiled_sums():
+    with cyclic_gc_paused(), compiled_sums(), compiled_forward():
         return _rewrite(data, filename, comp, options)
 
 

@@ -180,3 +180,23 @@ def test_fk_with_tool_and_work_object():
     T = robot.fk(np.zeros(6), tool=tool, wobj=wobj)
     # TCP 100 mm along tool0 z (= base x) from (815, 0, 1186.5); wobj origin at (500, 0, 100).
     assert np.allclose(T[:3, 3], [815 + 100 - 500, 0, 1186.5 - 100], atol=1e-9)
+
+
+@pytest.mark.parametrize("name", available_robots())
+def test_compiled_product_of_exponentials_is_numpys_to_rounding(name):
+    """Inside `compiled_forward` (the post-processor) the poses come from the compiled
+    kernel when numba is installed: the numpy poses to rounding, on every shipped robot,
+    over the whole joint range and at the tiny angles where the versine matters."""
+    from rapidfix.kinematics.screws import compiled_forward
+
+    robot = load_robot(name)
+    rng = np.random.default_rng(3)
+    q = np.concatenate([rng.uniform(-np.pi, np.pi, (3000, 6)),
+                        rng.normal(scale=1e-9, size=(100, 6))])
+    expected = robot.fk(q)
+    with compiled_forward():
+        got = robot.fk(q)
+    np.testing.assert_allclose(got[:, :3, :3], expected[:, :3, :3], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(got[:, :3, 3], expected[:, :3, 3], rtol=0, atol=1e-11)
+    assert np.array_equal(got[:, 3], expected[:, 3])
+    assert np.array_equal(robot.fk(q), expected)  # outside the block: numpy's as before
