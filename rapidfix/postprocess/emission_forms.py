@@ -26,8 +26,9 @@ from rapidfix.rapid.format import format_num, format_robtarget
 _JOINTS = "[[" + ",".join(["%.6f"] * 6) + "],"
 
 
-# Trailing zeros of a fraction and then its '.', before the ',' or ']' that ends the number.
-_TRAILING = re.compile(r"\.?0+(?=[,\]])")
+# Trailing zeros of a fraction, before the ',' or ']' that ends the number (a pattern
+# that starts with its literal '0' lets the regular-expression engine skip ahead to it).
+_TRAILING = re.compile(r"0+(?=[,\]])")
 
 
 def _trim(text: str) -> str:
@@ -35,11 +36,13 @@ def _trim(text: str) -> str:
     ',' or ']'; '-0' written '0'.
 
     Every number has exactly six decimals, so its last '0' before ',' or ']' is a
-    fraction's: the zeros cut (and the '.' when all six go) never reach an integer
-    part, whose digits stand before the '.'. A '-' stands only at the start of a
+    fraction's: the zeros cut never reach an integer part, whose digits stand before
+    the '.'; a '.' left just before ',' or ']' lost all six and goes too (nothing
+    else in these literals puts a '.' there). A '-' stands only at the start of a
     number, so '-0.000000' is a negative zero.
     """
-    return _TRAILING.sub("", text.replace("-0.000000", "0.000000"))
+    cut = _TRAILING.sub("", text.replace("-0.000000", "0.000000"))
+    return cut.replace(".,", ",").replace(".]", "]")
 
 
 def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
