@@ -34,7 +34,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the batch, print the table, write the JSON summary."""
-    from rapidfix.postprocess.batch import BatchSettings, run_batch, write_summary
+    from rapidfix.postprocess import BatchSettings, run_batch, write_summary
 
     if args.out_dir is None and not args.in_place:
         raise UsageError("an output folder OUT_DIR is needed unless --in-place is given")

@@ -12,7 +12,7 @@ from rapidfix.exceptions import InvalidOption, RapidfixError, UsageError
 from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
-    from rapidfix.postprocess.rewrite import RewriteOptions
+    from rapidfix.postprocess import RewriteOptions
 
 
 def add_common_options(parser: argparse.ArgumentParser) -> None:
@@ -68,7 +68,7 @@ FLAGS = {"emit": "--emit", "path_tolerance_mm": "--path-tolerance",
 def options_from_args(args: argparse.Namespace) -> RewriteOptions:
     """RewriteOptions from parsed command-line arguments; a bad value is refused in the
     command's words (its flag), not the library's (its field name)."""
-    from rapidfix.postprocess.rewrite import RewriteOptions
+    from rapidfix.postprocess import RewriteOptions
 
     if args.approach and args.emit != "jointtargets":
         raise UsageError(f"--approach needs --emit jointtargets (not {args.emit}): approach "
@@ -89,8 +89,7 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
 
 def run(args: argparse.Namespace) -> int:
     """Rewrite one program; print the skipped targets and the predicted deviation."""
-    from rapidfix.postprocess.compensator import Compensator
-    from rapidfix.postprocess.rewrite import rewrite_file
+    from rapidfix.postprocess import Compensator, rewrite_file
 
     source = Path(args.program)
     if args.in_place:

@@ -12,11 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from rapidfix.digest import sha256_bytes, sha256_file
-from rapidfix.error_model.model import ErrorModel
-from rapidfix.error_model.model_file import load_model
+from rapidfix.error_model import ErrorModel, load_model
 from rapidfix.exceptions import KinematicsError, ModelError
-from rapidfix.kinematics import RobotModel, load_robot, parse_robot
-from rapidfix.kinematics.ik import prepare
+from rapidfix.kinematics import RobotModel, load_robot, parse_robot, prepare
 
 
 @dataclass

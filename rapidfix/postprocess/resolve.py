@@ -16,10 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.kinematics.frames import pose
+from rapidfix.kinematics import pose
 from rapidfix.postprocess.placement import Placement, shared
-from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program
-from rapidfix.rapid.values import ToolData, WobjData
+from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program, ToolData, WobjData
 
 #: instructions that become MoveAbsJ (instruction key -> path kind)
 JOINT_FORM = {"movel": "L", "movej": "J", "movec": "C"}

@@ -49,8 +49,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
 from rapidfix.postprocess.resolve import Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Program, parse_program
-from rapidfix.rapid.edit import Editor
+from rapidfix.rapid import Editor, Program, parse_program
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 
