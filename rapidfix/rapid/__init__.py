@@ -1,8 +1,7 @@
 """The RAPID language layer: parse ABB RAPID, model its data and motions, edit spans.
 
 Start with `parse_program(text_or_bytes, filename)` or `load_program(path)`;
-rewrite with `rapidfix.rapid.edit.Editor`; format values with
-`rapidfix.rapid.format`.
+rewrite with `Editor`; format values with the `format_*` functions (all exported here).
 """
 
 from typing import TYPE_CHECKING
