@@ -45,7 +45,7 @@ class Compensator:
         and the declaration files; refuse a model made for another robot."""
         model = load_model(model_path)
         if robot is not None and robot_file is not None:
-            raise KinematicsError("give either --robot or --robot-file, not both")
+            raise KinematicsError("give either robot or robot_file, not both")
         if robot is None and robot_file is None and model.robot_definition is not None:
             robot_model = parse_robot(model.robot_definition, f"{model_path} (robot_definition)")
         else:

@@ -17,7 +17,7 @@ cannot:
   the direction it had. Where the move before is not known before run time (the
   first move of a routine, a loop body or an IF branch), the direction is
   unknown and effects take the value midway between the directions.
-- **Temperature** of the cell, as the user states it (`--temperature`).
+- **Temperature** of the cell, as the user states it (`RewriteOptions.temperature_c`).
 - **Configuration monitoring** (`ConfL`/`ConfJ \\Off`), followed like the load: with
   it off, the controller reaches a target on the configuration nearest the one it
   is in, not necessarily the one its confdata names (`config_monitoring`).

@@ -77,7 +77,7 @@ class Targets:
 
 
 class Declarations:
-    """Data declared outside the program (the --decls files), by lower-case name."""
+    """Data declared outside the program (Compensator.load(decl_files)), by lower-case name."""
 
     def __init__(self, programs: list[Program]) -> None:
         self._by_name: dict[str, Declaration] = {}
@@ -108,7 +108,7 @@ def operand_data(operand: Operand | None, type_name: str, outside: Declarations)
             return data, ""
     reason = operand.reason or "not known before run time"
     if _UNDECLARED in reason:
-        reason += " (pass the file that declares it with --decls)"
+        reason += " (pass the file that declares it with Compensator.load(decl_files))"
     return None, reason
 
 
@@ -165,7 +165,8 @@ def _instruction_kind(motion: MotionInstruction, emit: str) -> tuple[bool, str, 
         return True, JOINT_FORM.get(key, "X"), None
     kind = JOINT_FORM.get(key)
     if kind is None:
-        return True, "X", f"{motion.name} has no joint-target form (use --emit robtargets)"
+        return True, "X", (f"{motion.name} has no joint-target form "
+                            "(use RewriteOptions(emit='robtargets'))")
     return True, kind, None
 
 

@@ -229,8 +229,9 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                      "takes the configuration nearest the one it is in: compensated on that "
                      f"one, which differs from the confdata written for {other} of them")
     if options.temperature_c is not None and "temp_c" not in needs:
-        notes.append(f"--temperature {options.temperature_c:g} °C: no effect of the model "
-                     "depends on the cell temperature, so it changes nothing (recorded only)")
+        notes.append(f"RewriteOptions.temperature_c {options.temperature_c:g} °C: no effect of "
+                     "the model depends on the cell temperature, so it changes nothing "
+                     "(recorded only)")
     for eff in model.robot_effects:
         fields = eff.context_fields()
         reference = getattr(eff, "reference", None)
@@ -241,7 +242,7 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                                            else "assumed_reference")
                 warnings.append(
                     f"the model's {eff.name} depends on the cell temperature and no "
-                    f"--temperature was given: assumed the calibration's {assumed}")
+                    f"RewriteOptions.temperature_c was given: assumed the calibration's {assumed}")
             else:
                 record["temperature_c"] = f"{options.temperature_c:g}"
         if "time_s" in fields:
@@ -278,7 +279,7 @@ def _module_indent(program: Program) -> str:
 
 
 def _strip_old_header(editor: Editor, text: str) -> None:
-    """Remove the header lines of an earlier compensation (with --force)."""
+    """Remove the header lines of an earlier compensation (RewriteOptions(force=True))."""
     for match in re.finditer(r"\r?\n[ \t]*![ \t]*" + MARK + r"[^\r\n]*", text):
         editor.replace((match.start(), match.end()), "")
 
@@ -300,7 +301,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         raise RapidSemanticError(
             f"already compensated by rapidfix {old.version} (model {old.model_path})",
             file=filename,
-            hint="use --force to compensate it again",
+            hint="use RewriteOptions(force=True) to compensate it again",
         )
     planned = plan_program(program, comp, options.emit,
                            temperature_c=options.temperature_c, approach=options.approach)
@@ -388,7 +389,7 @@ def rewrite_file(
     same = target.exists() and source.exists() and target.resolve() == source.resolve()
     if same and not in_place:
         raise OutputExistsError("the output would overwrite the input", file=target,
-                                hint="choose another -o, or use --in-place (keeps a backup)")
+                                hint="choose another target, or pass in_place=True (keeps a backup)")
     data = source.read_bytes()
     result = rewrite_source(data, name or str(source), comp, options)
     if result.skipped and options.strict:
