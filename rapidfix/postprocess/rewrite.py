@@ -388,8 +388,9 @@ def rewrite_file(
     source, target = Path(source), Path(target)
     same = target.exists() and source.exists() and target.resolve() == source.resolve()
     if same and not in_place:
-        raise OutputExistsError("the output would overwrite the input", file=target,
-                                hint="choose another target, or pass in_place=True (keeps a backup)")
+        raise OutputExistsError(
+            "the output would overwrite the input", file=target,
+            hint="choose another target, or pass in_place=True (keeps a backup)")
     data = source.read_bytes()
     result = rewrite_source(data, name or str(source), comp, options)
     if result.skipped and options.strict:

@@ -58,8 +58,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.rapid.target_list import target_rows
     from rapidfix.rapid.values import typed_value
 
-# What other packages import from here but the imports above do not load: name -> module
-# of this package. Each is imported on first use (PEP 562), so it costs nothing until then.
+# The other exports, name -> module of this package: each is imported from its module on
+# first use (PEP 562), so exporting a name costs nothing until it is used.
 # To add one: ARCHITECTURE.md, "Exports".
 LAZY_EXPORTS = {
     "SYSTEM_DATA": "system_data",
