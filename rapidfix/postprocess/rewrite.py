@@ -49,7 +49,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
 from rapidfix.postprocess.resolve import Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Editor, Program, parse_program
+from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 
@@ -253,6 +253,26 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
     return notes, warnings, record
 
 
+def _foreign_call_warnings(program: Program) -> list[str]:
+    """One warning per procedure that is not a motion instruction rapidfix knows nor a
+    routine of the program, yet is passed targets: they are left as written."""
+    by_name: dict[str, list] = {}
+    for call in foreign_target_calls(program):
+        by_name.setdefault(call.name.lower(), []).append(call)
+    warnings = []
+    for calls in by_name.values():
+        first = program.span(calls[0].start, calls[0].start).location
+        names = list(dict.fromkeys(t if len(t) <= 40 else t[:36] + " ..."
+                                   for call in calls for t in call.targets))
+        shown = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+        more = f" ({len(calls)} calls)" if len(calls) > 1 else ""
+        warnings.append(
+            f"{first}: {calls[0].name}{more} is not a motion instruction rapidfix knows nor a "
+            f"routine of this program: the targets passed to it ({shown}) are left as "
+            "written; if it moves the robot to them, those moves are not compensated")
+    return warnings
+
+
 def _predicted_before(comp: Compensator, targets: Targets, p: Plan
                       ) -> tuple[float, float] | None:
     """The model's TCP error (mean, max, mm) of the compensated targets as the original
@@ -324,6 +344,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
     summary = (f"{compensated} of {len(planned.sites)} moves compensated, {points} points "
                f"added, {len(skipped)} left as they were")
     notes, warnings, conditions = _run_statement(comp, planned, refined.solved, options)
+    warnings.extend(_foreign_call_warnings(program))
     header = Header(
         version=__version__,
         model_path=comp.model_path,

@@ -33,6 +33,7 @@ from rapidfix.rapid.values import (
 
 if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.rapid.edit import Editor
+    from rapidfix.rapid.foreign_calls import foreign_target_calls
     from rapidfix.rapid.format import (
         format_declaration,
         format_jointtarget,
@@ -73,6 +74,7 @@ LAZY_EXPORTS = {
     "Routine": "syntax",
     "Statement": "syntax",
     "String": "syntax",
+    "foreign_target_calls": "foreign_calls",
     "format_declaration": "format",
     "format_jointtarget": "format",
     "format_num": "format",
@@ -118,6 +120,7 @@ __all__ = [
     "ToolData",
     "WobjData",
     "ZoneData",
+    "foreign_target_calls",
     "format_declaration",
     "format_jointtarget",
     "format_num",

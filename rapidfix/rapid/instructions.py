@@ -76,6 +76,13 @@ WRITING_PROCEDURES: dict[str, tuple[int, ...]] = {
     "readvararr": (2,),
 }
 
+# Procedures that take targets without moving the robot to them: a world zone's
+# joint limits, the recorded positions of a tool calibration.
+NON_MOVING_PROCEDURES = frozenset({
+    "wzhomejointdef", "wzlimjointdef", "mtooltcpcalib", "mtoolrotcalib", "stooltcpcalib",
+    "stoolrotcalib",
+})
+
 # Functions whose value is known only at run time (a reason, not a guess).
 RUNTIME_FUNCTIONS = frozenset({
     "crobt", "cjointt", "calcrobt", "calcjointt", "readnum", "readstr", "readbin",

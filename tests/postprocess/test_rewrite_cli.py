@@ -194,3 +194,38 @@ def test_every_flag_of_the_table_is_put_in_where_the_library_names_its_option():
     for words, flag in FLAGS.items():
         assert in_cli_words(f"use {words} here ({words})") == f"use {flag} here ({flag})"
     assert in_cli_words("target pA: no RewriteOptions here") == "target pA: no RewriteOptions here"
+
+
+SEARCHES = """MODULE Seam
+  CONST robtarget p10:=[[600,0,700],[0,0,1,0],[0,0,0,0],EXTAX];
+  CONST robtarget p20:=[[600,100,700],[0,0,1,0],[0,0,0,0],EXTAX];
+  PERS tooldata tWeld:=[TRUE,[[0,0,200],[1,0,0,0]],[2,[0,0,100],[1,0,0,0],0,0,0]];
+  VAR pose found;
+  PROC main()
+    MoveL p10, v100, fine, tWeld;
+    Search_1D found, p10, p20, v200, tWeld;
+    MoveL p20, v100, fine, tWeld;
+  ENDPROC
+ENDMODULE
+""".replace("EXTAX", EXTAX)
+
+
+def test_targets_passed_to_an_unknown_procedure_are_named_and_left_as_written(
+        cell, tmp_path, capsys):
+    """A SmarTac search is not a motion rapidfix knows: its targets stay as written, and
+    the user is told where (exit 3), not left to find out on the robot."""
+    src, out = tmp_path / "seam.mod", tmp_path / "out.mod"
+    src.write_text(SEARCHES)
+    assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert f"{src}:8:5: Search_1D is not a motion instruction rapidfix knows" in err
+    assert "(p10, p20) are left as written" in err
+    written = out.read_text()
+    assert "    Search_1D found, p10, p20, v200, tWeld;\n" in written
+    assert "CONST robtarget p10:=[[600,0,700]," in written  # still declared, unchanged
+    assert "MoveL p10" not in written  # the moves themselves are compensated
+    # without the search, nothing to say: exit 0
+    src.write_text(SEARCHES.replace("    Search_1D found, p10, p20, v200, tWeld;\n", ""))
+    assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o", str(out),
+                 "--force"]) == 0
+    assert "not a motion instruction" not in capsys.readouterr().err
