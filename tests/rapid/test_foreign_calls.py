@@ -74,6 +74,8 @@ def test_motions_own_routines_and_calls_without_targets_are_not():
     TPWrite "x" \\Num:=n;
     WaitTime n;
     WZHomeJointDef \\Inside, zone, jHome, jHome;
+    ReadAnyBin channel, p10;
+    WriteAnyBin channel, p10;
   ENDPROC
   PROC go(robtarget t)
     MoveL t, v100, fine, tool0;
