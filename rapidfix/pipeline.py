@@ -19,14 +19,18 @@ from typing import Any
 import numpy as np
 
 from rapidfix.digest import sha256_file
-from rapidfix.error_model.compensate import solve_compensation
-from rapidfix.error_model.context import Context
-from rapidfix.error_model.fit import fit_error_model, sweep_gaps
-from rapidfix.error_model.joint_rbf import JointRBF, OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import (
+    Context,
+    ErrorModel,
+    JointRBF,
+    OutsideRangeWarning,
+    fit_error_model,
+    solve_compensation,
+    sweep_gaps,
+)
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, is_shipped, load_robot
-from rapidfix.measure.files import (
+from rapidfix.measure import (
     PointTable,
     Setup,
     SweepTable,
@@ -36,9 +40,14 @@ from rapidfix.measure.files import (
     read_sweeps,
     robot_reach_mm,
 )
-from rapidfix.report.accuracy import BallbarRun, BeforeAfter, accuracy_report
-from rapidfix.report.document import Report, Table
-from rapidfix.report.metrics import ballbar_deviation
+from rapidfix.report import (
+    BallbarRun,
+    BeforeAfter,
+    Report,
+    Table,
+    accuracy_report,
+    ballbar_deviation,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -116,7 +125,7 @@ def fit_from_files(
     policy: str = "clamp",
 ) -> FitOutcome:
     """Read the setup and sweeps, analyse the sweeps, fit the per-joint model."""
-    from rapidfix.measure.sweeps import analyse_sweeps
+    from rapidfix.measure import analyse_sweeps
 
     setup = read_setup(setup_path, check_robot=robot is None)  # `robot` overrides the setup's
     robot_model = robot_for(setup, robot)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import ast
+import importlib
 import shutil
 import subprocess
 import sys
@@ -87,3 +88,68 @@ def test_no_module_imports_a_private_name_of_another():
                           for alias in node.names
                           if alias.name.startswith("_") and not alias.name.startswith("__")]
     assert not found, "\n".join(found)
+
+
+PACKAGES = sorted(p.parent.name for p in (ROOT / "rapidfix").glob("*/__init__.py"))
+
+
+def test_a_deep_import_is_reported(tmp_path):
+    """The check can fail: in a copy of the code where one package reaches into a module of
+    another (inside a function, past `rapidfix.rapid`'s root), the project's own contracts
+    name the importing module, the module reached and the line."""
+    shutil.copytree(ROOT / "rapidfix", tmp_path / "rapidfix",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    simulator = tmp_path / "rapidfix" / "link" / "simulator.py"
+    text = simulator.read_text(encoding="utf-8")
+    simulator.write_text(text + "\n\ndef _reach() -> None:\n"
+                         "    from rapidfix.rapid.format import format_num  # noqa: F401\n",
+                         encoding="utf-8")
+    line = len(text.splitlines()) + 4
+    done = subprocess.run([*_lint_imports(), "--config", str(ROOT / "pyproject.toml"),
+                           "--no-cache"], cwd=tmp_path, capture_output=True, text=True,
+                          check=False)
+    assert done.returncode != 0
+    assert "rapidfix.rapid is used through its root BROKEN" in done.stdout
+    assert f"rapidfix.link.simulator -> rapidfix.rapid.format (l.{line})" in done.stdout
+    assert "1 broken" in done.stdout
+
+
+def _lazy_table(package: str) -> tuple[dict[str, str], dict[str, str]]:
+    """A package's LAZY_EXPORTS, and what its `if TYPE_CHECKING:` block imports (name ->
+    module), read from the source."""
+    tree = ast.parse((ROOT / "rapidfix" / package / "__init__.py").read_text(encoding="utf-8"))
+    table: dict[str, str] = {}
+    typed: dict[str, str] = {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and ast.unparse(node.targets[0]) == "LAZY_EXPORTS":
+            table = ast.literal_eval(node.value)
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING":
+            typed |= {alias.name: imp.module.removeprefix(f"rapidfix.{package}.")
+                      for imp in node.body if isinstance(imp, ast.ImportFrom)
+                      for alias in imp.names}
+    return table, typed
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_exported_name_resolves(package):
+    """Every name in a package's __all__ is there (a lazy one is imported from the module its
+    table names, the same object), a type checker sees each lazy name from that module, no
+    lazy name is also a submodule (it would be shadowed once the module is imported), and
+    dir() lists them."""
+    root = importlib.import_module(f"rapidfix.{package}")
+    table, typed = _lazy_table(package)
+    assert typed == table
+    exported = getattr(root, "__all__", [])
+    assert set(table) <= set(exported)
+    assert len(exported) == len(set(exported))
+    submodules = {p.stem for p in (ROOT / "rapidfix" / package).glob("*.py")} | {
+        p.parent.name for p in (ROOT / "rapidfix" / package).glob("*/__init__.py")}
+    assert not set(table) & submodules
+    for name in exported:
+        value = getattr(root, name)
+        if name in table:
+            module = importlib.import_module(f"rapidfix.{package}.{table[name]}")
+            assert value is getattr(module, name), name
+    assert set(exported) <= set(dir(root))
+    with pytest.raises(AttributeError, match="no attribute 'no_such_name'"):
+        root.no_such_name  # noqa: B018

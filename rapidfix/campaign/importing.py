@@ -19,7 +19,7 @@ from rapidfix.campaign.pose_table import read_plan_meta, read_pose_table
 from rapidfix.campaign.tracker_export import read_export
 from rapidfix.exceptions import MeasurementError, OutputExistsError, RapidfixError
 from rapidfix.kinematics import load_robot
-from rapidfix.measure.files import PointTable, Setup, SweepTable
+from rapidfix.measure import PointTable, Setup, SweepTable
 
 
 @dataclass

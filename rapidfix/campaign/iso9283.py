@@ -36,8 +36,7 @@ from typing import Any
 import numpy as np
 
 from rapidfix.exceptions import MeasurementError
-from rapidfix.measure.files import PointTable
-from rapidfix.measure.registration import rigid_fit
+from rapidfix.measure import PointTable, rigid_fit
 
 PAIR_ORDER = [(2, 4)] + [p for p in combinations(range(1, 6), 2) if p != (2, 4)]
 

@@ -19,14 +19,7 @@ import numpy as np
 from rapidfix.campaign.matching import Matching
 from rapidfix.campaign.pose_table import PoseTable
 from rapidfix.campaign.tracker_export import TrackerExport
-from rapidfix.measure.files import (
-    PointTable,
-    Setup,
-    SweepTable,
-    write_points,
-    write_setup,
-    write_sweeps,
-)
+from rapidfix.measure import PointTable, Setup, SweepTable, write_points, write_setup, write_sweeps
 
 FILES = {"sweep": "sweeps.csv", "calibration": "calibration.csv",
          "validation": "validation.csv", "iso9283": "iso9283.csv"}

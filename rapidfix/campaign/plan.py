@@ -38,7 +38,7 @@ from rapidfix.campaign.timing import (
 )
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import RobotModel
-from rapidfix.measure.files import toml_value
+from rapidfix.measure import toml_value
 
 APPROACH_MODES = ("same", "both", "none")
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import MeasurementError
-from rapidfix.measure.files import read_measurement_text
+from rapidfix.measure import read_measurement_text
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -27,7 +27,7 @@ from rapidfix.campaign.sight import TrackerView
 from rapidfix.campaign.timing import rated_joint_speed
 from rapidfix.exceptions import RapidfixError
 from rapidfix.kinematics import RobotModel
-from rapidfix.sim.plans import longest_run, plausible_poses
+from rapidfix.sim import longest_run, plausible_poses
 
 #: The held pose tried first for every sweep (the virtual cell's), deg.
 DEFAULT_HOLD_DEG = (0.0, 0.0, 0.0, 0.0, 45.0, 0.0)

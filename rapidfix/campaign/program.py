@@ -21,8 +21,8 @@ import numpy as np
 
 from rapidfix import __version__
 from rapidfix.campaign.timing import MotionSettings
-from rapidfix.kinematics.frames import matrix_to_quat
-from rapidfix.rapid.format import (
+from rapidfix.kinematics import matrix_to_quat
+from rapidfix.rapid import (
     format_declaration,
     format_jointtarget,
     format_num,

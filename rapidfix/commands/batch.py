@@ -6,8 +6,13 @@ import argparse
 import os
 from pathlib import Path
 
-from rapidfix.commands.rewrite import add_common_options, options_from_args
-from rapidfix.exceptions import UsageError
+from rapidfix.commands.rewrite import (
+    add_common_options,
+    in_cli_words,
+    options_from_args,
+    reword,
+)
+from rapidfix.exceptions import RapidfixError, UsageError
 from rapidfix.paths import check_output_dir, check_output_file
 
 
@@ -34,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the batch, print the table, write the JSON summary."""
-    from rapidfix.postprocess.batch import BatchSettings, run_batch, write_summary
+    from rapidfix.postprocess import BatchSettings, run_batch, write_summary
 
     if args.out_dir is None and not args.in_place:
         raise UsageError("an output folder OUT_DIR is needed unless --in-place is given")
@@ -52,8 +57,15 @@ def run(args: argparse.Namespace) -> int:
         options=options_from_args(args),
         in_place=args.in_place,
     )
-    summary = run_batch(args.in_dir, args.out_dir, settings, workers=args.jobs,
-                        progress=not args.no_progress)
+    try:
+        summary = run_batch(args.in_dir, args.out_dir, settings, workers=args.jobs,
+                            progress=not args.no_progress)
+    except RapidfixError as err:
+        reword(err)
+        raise
+    for outcome in summary.files:  # the table and the summary file in the command's words
+        outcome.message = in_cli_words(outcome.message)
+        outcome.skipped = [in_cli_words(line) for line in outcome.skipped]
     print(summary.table())
     totals = summary.to_dict()
     worst = totals["worst_predicted_mm"]

@@ -6,8 +6,7 @@ import argparse
 import sys
 
 from rapidfix.exceptions import RapidfixError
-from rapidfix.rapid import Program, load_program
-from rapidfix.rapid.syntax_errors import placeholders_in
+from rapidfix.rapid import Program, load_program, placeholders_in
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -56,8 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from rapidfix import pipeline
-    from rapidfix.error_model.model_file import save_model
-    from rapidfix.report.document import write_report
+    from rapidfix.error_model import save_model
+    from rapidfix.report import write_report
     from rapidfix.sim import VirtualRobot, simulate_cell
 
     out = Path(args.out)

@@ -13,7 +13,7 @@ from rapidfix.paths import check_input_file, check_output_dir, check_output_file
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `diagnose` command."""
-    from rapidfix.diagnose.candidate_builders import CANDIDATES
+    from rapidfix.diagnose import CANDIDATES
 
     parser = subparsers.add_parser(
         "diagnose",
@@ -44,8 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Diagnose, save, print the summary."""
-    from rapidfix.diagnose.candidate_builders import CANDIDATES
-    from rapidfix.diagnose.run import diagnose_files, summary_lines
+    from rapidfix.diagnose import CANDIDATES, diagnose_files, summary_lines
 
     out = Path(args.out)
     outputs = [out / "model.json", out / "diagnosis.html", out / "diagnosis.json"]

@@ -55,9 +55,8 @@ def _fit(args: argparse.Namespace) -> None:
     """The work of `run`: every path checked first, the model written last, nothing
     written when any step fails."""
     from rapidfix import pipeline
-    from rapidfix.error_model.model_file import save_model
-    from rapidfix.report.accuracy import validation_section
-    from rapidfix.report.document import write_report
+    from rapidfix.error_model import save_model
+    from rapidfix.report import validation_section, write_report
 
     output = Path(args.output)
     inputs = [Path(args.setup), *map(Path, args.sweeps)]

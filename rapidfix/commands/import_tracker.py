@@ -9,7 +9,7 @@ from pathlib import Path
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `import` command."""
-    from rapidfix.campaign.matching import MODES
+    from rapidfix.campaign import MODES
 
     p = subparsers.add_parser(
         "import",
@@ -44,7 +44,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, match, check, write; every problem is printed, the first is the error."""
-    from rapidfix.campaign.importing import import_export
+    from rapidfix.campaign import import_export
 
     smr = None
     if args.smr_offset:

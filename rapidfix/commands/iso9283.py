@@ -48,7 +48,7 @@ def iso_figures(results: dict[str, dict[str, Any]]) -> Any:
     """AP and RP per pose, each run and frame side by side (bar chart)."""
     from matplotlib.figure import Figure as MplFigure
 
-    from rapidfix.report.figures import Figure, png_bytes
+    from rapidfix.report import Figure, png_bytes
 
     fig = MplFigure(figsize=(10, 4), layout="constrained")
     axes = fig.subplots(1, 2)
@@ -73,11 +73,10 @@ def iso_figures(results: dict[str, dict[str, Any]]) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Evaluate the run(s), print the table, write the report."""
-    from rapidfix.campaign.iso9283 import cube_runs, evaluate, registered, to_robot
-    from rapidfix.campaign.poses import ball_positions
+    from rapidfix.campaign import ball_positions, cube_runs, evaluate, registered, to_robot
     from rapidfix.kinematics import load_robot
-    from rapidfix.measure.files import read_points, read_setup
-    from rapidfix.report.document import Report, Table, write_report
+    from rapidfix.measure import read_points, read_setup
+    from rapidfix.report import Report, Table, write_report
 
     setup = read_setup(args.setup)
     robot = load_robot(setup.robot)

@@ -22,8 +22,7 @@ def parse_numbers(text: str, n: int | None, what: str) -> list[float]:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the `plan` command."""
-    from rapidfix.campaign.plan import APPROACH_MODES
-    from rapidfix.campaign.program import TRIGGERS
+    from rapidfix.campaign import APPROACH_MODES, TRIGGERS
     from rapidfix.commands.robot_options import add_robot_arguments
 
     p = subparsers.add_parser(
@@ -102,12 +101,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _settings(args: argparse.Namespace):
-    from rapidfix.campaign.envelope import Box, Envelope
-    from rapidfix.campaign.plan import PlanSettings
-    from rapidfix.campaign.program import ProgramOptions
-    from rapidfix.campaign.sight import TrackerView
-    from rapidfix.campaign.timing import MotionSettings
-    from rapidfix.kinematics.frames import pose
+    from rapidfix.campaign import (
+        Box,
+        Envelope,
+        MotionSettings,
+        PlanSettings,
+        ProgramOptions,
+        TrackerView,
+    )
+    from rapidfix.kinematics import pose
 
     smr = parse_numbers(args.smr_offset, 3, "--smr-offset")
     joints = tuple(int(v) for v in parse_numbers(args.joints, None, "--joints")) if \
@@ -171,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
     """Plan, check, write; print what was written, the point count and the run time."""
     from pathlib import Path
 
-    from rapidfix.campaign.plan import make_plan, write_plan
+    from rapidfix.campaign import make_plan, write_plan
     from rapidfix.commands.robot_options import robot_from_args
 
     out = Path(args.out_dir)

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -12,7 +14,7 @@ from rapidfix.exceptions import InvalidOption, RapidfixError, UsageError
 from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
-    from rapidfix.postprocess.rewrite import RewriteOptions
+    from rapidfix.postprocess import RewriteOptions
 
 
 def add_common_options(parser: argparse.ArgumentParser) -> None:
@@ -60,15 +62,38 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-#: the command-line flag of each RewriteOptions field, for the command's own messages
-FLAGS = {"emit": "--emit", "path_tolerance_mm": "--path-tolerance",
-         "temperature_c": "--temperature"}
+#: How the library's messages name an option -> the command line's flag. The library
+#: speaks to a Python caller (`use RewriteOptions(force=True) to compensate it again`), the
+#: command line to its user (`use --force …`): the library's notes, warnings, skip reasons
+#: and errors (message and hint) are printed through `in_cli_words`.
+FLAGS = {
+    "RewriteOptions.emit": "--emit",
+    "RewriteOptions(emit='robtargets')": "--emit robtargets",
+    "RewriteOptions.path_tolerance_mm": "--path-tolerance",
+    "RewriteOptions(strict=True)": "--strict",
+    "RewriteOptions(force=True)": "--force",
+    "RewriteOptions.temperature_c": "--temperature",
+    "Compensator.load(decl_files)": "--decls",
+    "BatchSettings(in_place=True)": "--in-place",
+}
+_LIBRARY_WORDS = re.compile("|".join(map(re.escape, sorted(FLAGS, key=len, reverse=True))))
+
+
+def in_cli_words(text: str) -> str:
+    """A library message with each option it names replaced by the command-line flag."""
+    return _LIBRARY_WORDS.sub(lambda found: FLAGS[found.group()], text)
+
+
+def reword(err: RapidfixError) -> None:
+    """Put a library error's message and hint in the command line's words (in place)."""
+    err.message = in_cli_words(err.message)
+    err.hint = in_cli_words(err.hint) if err.hint else err.hint
 
 
 def options_from_args(args: argparse.Namespace) -> RewriteOptions:
     """RewriteOptions from parsed command-line arguments; a bad value is refused in the
     command's words (its flag), not the library's (its field name)."""
-    from rapidfix.postprocess.rewrite import RewriteOptions
+    from rapidfix.postprocess import RewriteOptions
 
     if args.approach and args.emit != "jointtargets":
         raise UsageError(f"--approach needs --emit jointtargets (not {args.emit}): approach "
@@ -84,13 +109,13 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
             approach=args.approach,
         )
     except InvalidOption as err:
-        raise RapidfixError(f"{FLAGS.get(err.option, err.option)} {err.detail}") from None
+        flag = FLAGS.get(f"RewriteOptions.{err.option}", err.option)
+        raise RapidfixError(f"{flag} {err.detail}") from None
 
 
 def run(args: argparse.Namespace) -> int:
     """Rewrite one program; print the skipped targets and the predicted deviation."""
-    from rapidfix.postprocess.compensator import Compensator
-    from rapidfix.postprocess.rewrite import rewrite_file
+    from rapidfix.postprocess import Compensator, rewrite_file
 
     source = Path(args.program)
     if args.in_place:
@@ -102,14 +127,20 @@ def run(args: argparse.Namespace) -> int:
     else:
         target = check_output_file(args.output, inputs=[source])
     options = options_from_args(args)
-    comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
-    result = rewrite_file(source, target, comp, options, in_place=args.in_place)
-    for line in result.report_lines():
+    try:
+        comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
+        result = rewrite_file(source, target, comp, options, in_place=args.in_place)
+    except RapidfixError as err:
+        reword(err)
+        raise
+    notes = [in_cli_words(note) for note in result.notes]
+    for line in replace(result, notes=notes).report_lines():
         print(line)
     for skipped in result.skipped:
-        print(f"rapidfix: warning: {skipped}", file=sys.stderr)
+        print(f"rapidfix: warning: {replace(skipped, reason=in_cli_words(skipped.reason))}",
+              file=sys.stderr)
     for warning in result.warnings:
-        print(f"rapidfix: warning: {warning}", file=sys.stderr)
+        print(f"rapidfix: warning: {in_cli_words(warning)}", file=sys.stderr)
     if result.skipped and options.strict:
         print(f"rapidfix: error: {len(result.skipped)} target(s) cannot be compensated "
               "(--strict): nothing written", file=sys.stderr)

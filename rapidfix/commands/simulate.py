@@ -7,8 +7,7 @@ import json
 
 from rapidfix.exceptions import RapidfixError
 from rapidfix.paths import check_output_dir
-from rapidfix.sim import EFFECTS, simulate_cell
-from rapidfix.sim.virtual_robot import DEFAULT_ROBOT
+from rapidfix.sim import DEFAULT_ROBOT, EFFECTS, simulate_cell
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

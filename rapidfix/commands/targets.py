@@ -8,9 +8,7 @@ import io
 import json
 import sys
 
-from rapidfix.rapid import load_program
-from rapidfix.rapid.format import format_value
-from rapidfix.rapid.target_list import target_rows
+from rapidfix.rapid import format_value, load_program, target_rows
 
 _COLUMNS = ("name", "line", "column", "kind", "source", "static", "value", "reason")
 

@@ -13,10 +13,16 @@ import tempfile
 from pathlib import Path
 
 from rapidfix.exceptions import LinkError
-from rapidfix.link import RECEIVER_MODULE
-from rapidfix.link.protocol import MAX_PAYLOAD, OVERHEAD
-from rapidfix.link.simulator import SimulatedController
-from rapidfix.link.uploader import LinkSettings, UploadResult, plan_upload, upload_file
+from rapidfix.link import (
+    MAX_PAYLOAD,
+    OVERHEAD,
+    RECEIVER_MODULE,
+    LinkSettings,
+    SimulatedController,
+    UploadResult,
+    plan_upload,
+    upload_file,
+)
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

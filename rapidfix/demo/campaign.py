@@ -13,23 +13,28 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.campaign.importing import import_export
-from rapidfix.campaign.iso9283 import cube_runs, evaluate, to_robot
-from rapidfix.campaign.plan import PlanSettings, make_plan, write_plan
-from rapidfix.campaign.poses import ball_positions
-from rapidfix.campaign.program import ProgramOptions
+from rapidfix.campaign import (
+    PlanSettings,
+    ProgramOptions,
+    ball_positions,
+    cube_runs,
+    evaluate,
+    import_export,
+    make_plan,
+    to_robot,
+    write_plan,
+)
 from rapidfix.demo.campaign_run import simulate_program
 from rapidfix.kinematics import load_robot
-from rapidfix.measure.files import read_points
-from rapidfix.sim.virtual_robot import DEFAULT_ROBOT, DEFAULT_SMR_OFFSET_MM
+from rapidfix.measure import read_points
+from rapidfix.sim import DEFAULT_ROBOT, DEFAULT_SMR_OFFSET_MM
 
 CYCLES = 10
 
 
 def demo_campaign(out: Path, model_path: Path, seed: int) -> dict[str, Any]:
     """Run the cube before and after compensation; AP per pose (robot frame) and floor."""
-    from rapidfix.postprocess.compensator import Compensator
-    from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
+    from rapidfix.postprocess import Compensator, RewriteOptions, rewrite_file
 
     robot = load_robot(DEFAULT_ROBOT)
     plan = make_plan(robot, PlanSettings(

@@ -17,15 +17,12 @@ from typing import Any
 import numpy as np
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.campaign.pose_table import read_plan_meta, read_pose_table
-from rapidfix.campaign.timing import MotionSettings
-from rapidfix.campaign.tracker_export import write_export
+from rapidfix.campaign import MotionSettings, read_plan_meta, read_pose_table, write_export
 from rapidfix.demo.program_run import Run, measure_run, run_program
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.kinematics import load_robot
 from rapidfix.rapid import load_program
-from rapidfix.sim.cell import joint1_gauge
-from rapidfix.sim.virtual_robot import DEFAULT_ROBOT, DEFAULT_SMR_OFFSET_MM, VirtualRobot
+from rapidfix.sim import DEFAULT_ROBOT, DEFAULT_SMR_OFFSET_MM, VirtualRobot, joint1_gauge
 
 
 @dataclass(frozen=True)

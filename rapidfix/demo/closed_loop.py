@@ -25,14 +25,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from rapidfix.atomic import write_text_atomic
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.kinematics import RobotModel
-from rapidfix.kinematics.frames import pose
-from rapidfix.postprocess.emission_forms import robtarget_literals
-from rapidfix.postprocess.execute import align_axis1, commanded_motions
+from rapidfix.error_model import OutsideRangeWarning
+from rapidfix.kinematics import RobotModel, pose
+from rapidfix.postprocess import align_axis1, commanded_motions, robtarget_literals
 from rapidfix.rapid import parse_program
-from rapidfix.sim.plans import point_plan
-from rapidfix.sim.virtual_robot import RunConditions
+from rapidfix.sim import RunConditions, point_plan
 
 #: the two tools: (name, TCP translation mm, TCP quaternion, load kg, load cog mm (flange))
 TOOLS = (
@@ -220,9 +217,8 @@ def demo_on_robot(cell: str | Path, models: dict[str, str | Path], out: str | Pa
     """The demo's last step: a cell program rewritten with each model (label → file) and
     run on the virtual robot of the measurement set `cell` (its truth.json), before and
     after. Writes OUT/cell_loop.mod and OUT/cell_loop.LABEL.mod."""
-    from rapidfix.postprocess.compensator import Compensator
-    from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
-    from rapidfix.sim.virtual_robot import VirtualRobot
+    from rapidfix.postprocess import Compensator, RewriteOptions, rewrite_file
+    from rapidfix.sim import VirtualRobot
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

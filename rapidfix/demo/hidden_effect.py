@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from rapidfix.diagnose.run import diagnose_files
+from rapidfix.diagnose import diagnose_files
 
 DEFAULT_EFFECT = "joint_compliance"
 
@@ -25,7 +25,7 @@ def demo_loop(out_dir: str | Path, *, seed: int = 1, effect: str = DEFAULT_EFFEC
     OUT/model.json (extended) and OUT/diagnosis.{html,json}.
     """
     from rapidfix import pipeline
-    from rapidfix.error_model.model_file import save_model
+    from rapidfix.error_model import save_model
     from rapidfix.sim import simulate_cell
 
     out = Path(out_dir)

@@ -22,12 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.campaign.timing import MotionSettings, move_durations
+from rapidfix.campaign import MotionSettings, move_durations
 from rapidfix.exceptions import RapidSemanticError
-from rapidfix.postprocess.execute import commanded_motions
-from rapidfix.rapid import Program
-from rapidfix.rapid import syntax as s
-from rapidfix.sim.virtual_robot import RunConditions, VirtualRobot
+from rapidfix.postprocess import commanded_motions
+from rapidfix.rapid import NameRef, Node, Number, ProcedureCall, Program, Routine, Statement, String
+from rapidfix.sim import RunConditions, VirtualRobot
 
 IGNORED_CALLS = frozenset({"gripload", "confj", "confl", "accset", "velset", "singarea",
                            "tperase", "pathacclim", "motionsup", "setdo", "reset", "set",
@@ -47,24 +46,24 @@ class Run:
     total_s: float
 
 
-def _fail(program: Program, node: s.Node, message: str) -> RapidSemanticError:
+def _fail(program: Program, node: Node, message: str) -> RapidSemanticError:
     line, col = program.source.line_column(node.start)
     return RapidSemanticError(message, file=program.filename, line=line, column=col)
 
 
-def _statements(program: Program) -> list[s.Statement]:
+def _statements(program: Program) -> list[Statement]:
     """main's statements in execution order, calls of the module's routines inlined."""
     routines = {item.name.lower(): item for module in program.syntax.modules
-                for item in module.items if isinstance(item, s.Routine)}
+                for item in module.items if isinstance(item, Routine)}
     if "main" not in routines:
         raise RapidSemanticError("no PROC main() to run", file=program.filename)
-    out: list[s.Statement] = []
+    out: list[Statement] = []
 
-    def walk(routine: s.Routine, depth: int) -> None:
+    def walk(routine: Routine, depth: int) -> None:
         if depth > 20:
             raise _fail(program, routine, "routine calls nest more than 20 deep")
         for stmt in routine.body:
-            if isinstance(stmt, s.ProcedureCall) and stmt.key in routines:
+            if isinstance(stmt, ProcedureCall) and stmt.key in routines:
                 called = routines[stmt.key]
                 if called.parameters or called.kind != "PROC":
                     raise _fail(program, stmt, f"the simulator runs only calls of "
@@ -77,23 +76,23 @@ def _statements(program: Program) -> list[s.Statement]:
     return out
 
 
-def _trigger_id(st: s.Statement) -> str | bool | None:
+def _trigger_id(st: Statement) -> str | bool | None:
     """False: not a trigger; None: a PulseDO; else the point id a TPWrite writes
     (messages starting with 'rapidfix:' are for the operator, not triggers)."""
-    if not isinstance(st, s.ProcedureCall):
+    if not isinstance(st, ProcedureCall):
         return False
     if st.key == "pulsedo":
         return None
-    if st.key == "tpwrite" and st.args and isinstance(st.args[0].value, s.String):
+    if st.key == "tpwrite" and st.args and isinstance(st.args[0].value, String):
         text = st.args[0].value.value
         return False if text.startswith("rapidfix:") else text
     return False
 
 
-def _number(program: Program, expr: s.Node | None) -> float:
-    if isinstance(expr, s.Number):
+def _number(program: Program, expr: Node | None) -> float:
+    if isinstance(expr, Number):
         return float(expr.value)
-    if isinstance(expr, s.NameRef):
+    if isinstance(expr, NameRef):
         decl = program.declaration(expr.name)
         if decl is not None and isinstance(decl.value, (int, float)):
             return float(decl.value)
@@ -111,7 +110,7 @@ def run_program(program: Program, robot_model: object, *, motion: MotionSettings
     # one pass for the moves' joints, then their durations in one vectorised call
     moves: list[np.ndarray] = []
     for st in stmts:
-        if isinstance(st, s.ProcedureCall) and id(st) in motion_of:
+        if isinstance(st, ProcedureCall) and id(st) in motion_of:
             k = motion_of[id(st)]
             if k not in q_of:
                 raise _fail(program, st, f"{st.name}: its target is not known before run "
@@ -135,7 +134,7 @@ def run_program(program: Program, robot_model: object, *, motion: MotionSettings
         id_out.append(label)
 
     for st in stmts:
-        if not isinstance(st, s.ProcedureCall):
+        if not isinstance(st, ProcedureCall):
             raise _fail(program, st, "the simulator runs straight-line programs: no "
                         "IF, FOR, WHILE, TEST or assignments")
         key = st.key

@@ -19,10 +19,15 @@ import numpy as np
 from rapidfix.atomic import write_text_atomic
 from rapidfix.demo.ballbar_program import ballbar_program
 from rapidfix.exceptions import RapidfixError
-from rapidfix.postprocess.batch import RAPID_SUFFIXES
-from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.execute import Execution, align_axis1, commanded_motions
-from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
+from rapidfix.postprocess import (
+    RAPID_SUFFIXES,
+    Compensator,
+    Execution,
+    RewriteOptions,
+    align_axis1,
+    commanded_motions,
+    rewrite_file,
+)
 from rapidfix.rapid import load_program
 
 BALLBAR = "ballbar.mod"

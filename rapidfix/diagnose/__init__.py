@@ -10,3 +10,28 @@ before/after report with the evidence, `features`/`plots` the residual against
 what exposed each effect.
 `rapidfix.demo.demo_loop` shows the whole loop on a virtual robot with one hidden effect.
 """
+
+from typing import TYPE_CHECKING
+
+from rapidfix import lazy_exports
+
+if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
+    from rapidfix.diagnose.candidate_builders import CANDIDATES
+    from rapidfix.diagnose.run import diagnose_files, summary_lines
+
+# The other exports, name -> module of this package: each is imported from its module on
+# first use (PEP 562), so exporting a name costs nothing until it is used.
+# To add one: ARCHITECTURE.md, "Exports".
+LAZY_EXPORTS = {
+    "CANDIDATES": "candidate_builders",
+    "diagnose_files": "run",
+    "summary_lines": "run",
+}
+
+__all__ = [
+    "CANDIDATES",
+    "diagnose_files",
+    "summary_lines",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, LAZY_EXPORTS)

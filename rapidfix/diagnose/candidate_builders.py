@@ -18,17 +18,23 @@ import numpy as np
 
 from rapidfix.diagnose.sensitivity import joint_derivatives
 from rapidfix.diagnose.structured import screen
-from rapidfix.error_model.candidates.backlash import Backlash, last_motion_direction
-from rapidfix.error_model.candidates.compliance import JointCompliance
-from rapidfix.error_model.candidates.coupling import JointCoupling
-from rapidfix.error_model.candidates.geometry import N_ERRORS, LinkGeometry, identifiable_modes
-from rapidfix.error_model.candidates.registration import TrackerScale
-from rapidfix.error_model.candidates.thermal import ThermalDrift
-from rapidfix.error_model.candidates.tool_offset import ToolOffset
-from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import (
+    N_ERRORS,
+    Backlash,
+    Effect,
+    ErrorModel,
+    JointCompliance,
+    JointCoupling,
+    LinkGeometry,
+    MeasuredPoints,
+    OutsideRangeWarning,
+    ThermalDrift,
+    ToolOffset,
+    TrackerScale,
+    identifiable_modes,
+    jacobian,
+    last_motion_direction,
+)
 from rapidfix.kinematics import RobotModel
 
 #: a context variable must vary by more than this to drive thermal drift (K, or s)

@@ -12,10 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.error_model.candidates.backlash import last_motion_direction
-from rapidfix.error_model.context import Context
-from rapidfix.error_model.fit_effects import MeasuredPoints
-from rapidfix.measure.files import PointTable, Setup, ball_offsets
+from rapidfix.error_model import Context, MeasuredPoints, last_motion_direction
+from rapidfix.measure import PointTable, Setup, ball_offsets
 
 #: per-axis tracker σ assumed when neither the model nor the setup states one (mm)
 DEFAULT_SIGMA_MM = 0.01

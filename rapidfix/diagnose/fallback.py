@@ -33,16 +33,16 @@ import numpy as np
 
 from rapidfix.diagnose.sensitivity import residual_off_model
 from rapidfix.diagnose.structured import MIN_SPREAD
-from rapidfix.error_model.candidates.rbf_correction import (
+from rapidfix.error_model import (
     CONTEXT_FEATURES,
     JOINT_FEATURES,
+    ErrorModel,
+    MeasuredPoints,
     RBFCorrection,
     feature_label,
     feature_values,
     gaussian_design,
 )
-from rapidfix.error_model.fit_effects import MeasuredPoints
-from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import RobotModel
 
 PHYSICS = "a smooth correction of one joint over a few features; its cause is unknown"

@@ -15,9 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.error_model.candidates.backlash import last_motion_direction
-from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import MeasuredPoints
+from rapidfix.error_model import Effect, MeasuredPoints, last_motion_direction
 
 
 @dataclass(frozen=True)

@@ -36,11 +36,15 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from rapidfix.error_model.candidates.geometry import LinkGeometry
-from rapidfix.error_model.candidates.joint_reference import OFFSET_JOINTS, JointReference
-from rapidfix.error_model.candidates.tool_offset import ToolOffset
-from rapidfix.error_model.fit_effects import MeasuredPoints, predict
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import (
+    OFFSET_JOINTS,
+    ErrorModel,
+    JointReference,
+    LinkGeometry,
+    MeasuredPoints,
+    ToolOffset,
+    predict,
+)
 from rapidfix.kinematics import RobotModel
 
 #: a joint's zero after the maker's calibration (1σ, rad)

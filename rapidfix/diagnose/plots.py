@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
-from rapidfix.report.figures import AFTER_COLOUR, BEFORE_COLOUR, Figure, finite_list, png_bytes
+from rapidfix.report import AFTER_COLOUR, BEFORE_COLOUR, Figure, finite_list, png_bytes
 
 
 def evidence_figure(kind: str, feature: np.ndarray, label: str, residual_mm: np.ndarray,

@@ -25,12 +25,9 @@ from rapidfix.diagnose.selection import (
     Trial,
 )
 from rapidfix.diagnose.structured import ranking_records
-from rapidfix.error_model.candidates.geometry import LinkGeometry, error_names
-from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import MeasuredPoints
+from rapidfix.error_model import Effect, LinkGeometry, MeasuredPoints, error_names
 from rapidfix.kinematics import RobotModel
-from rapidfix.report.document import Report, Table
-from rapidfix.report.figures import position_error_figure
+from rapidfix.report import Report, Table, position_error_figure
 
 
 def interface_units(names: tuple[str, ...] | list[str], values: np.ndarray,

@@ -14,12 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.error_model.candidates.registration import world_to_base
-from rapidfix.error_model.fit_effects import MeasuredPoints
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import ErrorModel, MeasuredPoints, OutsideRangeWarning, world_to_base
 from rapidfix.kinematics import RobotModel
-from rapidfix.report.metrics import position_error_stats
+from rapidfix.report import position_error_stats
 
 
 @dataclass(frozen=True)

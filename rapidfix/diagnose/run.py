@@ -20,19 +20,11 @@ from rapidfix.diagnose.gauges import resolve_flange_gauge
 from rapidfix.diagnose.report import build_report, statement, trial_record
 from rapidfix.diagnose.selection import Selection, select
 from rapidfix.digest import sha256_file
-from rapidfix.error_model.fit_effects import MeasuredPoints
-from rapidfix.error_model.model import ErrorModel
-from rapidfix.error_model.model_file import load_model, save_model
+from rapidfix.error_model import ErrorModel, MeasuredPoints, load_model, save_model
 from rapidfix.exceptions import MeasurementError, ModelError
 from rapidfix.kinematics import RobotModel, load_robot
-from rapidfix.measure.files import (
-    PointTable,
-    Setup,
-    read_points,
-    read_setup,
-    robot_reach_mm,
-)
-from rapidfix.report.document import Report, write_report
+from rapidfix.measure import PointTable, Setup, read_points, read_setup, robot_reach_mm
+from rapidfix.report import Report, write_report
 
 #: fewest calibration points accepted (the richest candidate has ~40 parameters)
 MIN_CALIBRATION_POINTS = 20

@@ -61,14 +61,18 @@ from rapidfix.diagnose.fallback import PHYSICS as FALLBACK_PHYSICS
 from rapidfix.diagnose.fallback import Proposal, propose
 from rapidfix.diagnose.residuals import Residuals, residuals
 from rapidfix.diagnose.structured import Screened, screen
-from rapidfix.error_model.candidates.joint_reference import JointReference
-from rapidfix.error_model.candidates.registration import TrackerFrame
-from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import EffectsFit, MeasuredPoints, fit_free_effects
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import (
+    Effect,
+    EffectsFit,
+    ErrorModel,
+    JointReference,
+    MeasuredPoints,
+    OutsideRangeWarning,
+    TrackerFrame,
+    fit_free_effects,
+)
 from rapidfix.kinematics import RobotModel
-from rapidfix.measure.registration import rigid_fit
+from rapidfix.measure import rigid_fit
 
 BIC_MARGIN = 10.0
 Z_MIN = 3.0

@@ -12,9 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.error_model.fit_effects import MeasuredPoints, jacobian, predict
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import ErrorModel, MeasuredPoints, OutsideRangeWarning, jacobian, predict
 from rapidfix.kinematics import RobotModel
 
 

@@ -28,14 +28,17 @@ from typing import Any
 import numpy as np
 
 from rapidfix.diagnose.sensitivity import residual_off_model
-from rapidfix.error_model.candidates.frame_driver import FrameDriver
-from rapidfix.error_model.candidates.gravity import nominal_robot
-from rapidfix.error_model.candidates.joint_driver import JointDriver
-from rapidfix.error_model.context import last_motion_direction
-from rapidfix.error_model.effect import Effect
-from rapidfix.error_model.fit_effects import MeasuredPoints, predict
-from rapidfix.error_model.joint_rbf import OutsideRangeWarning
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import (
+    Effect,
+    ErrorModel,
+    FrameDriver,
+    JointDriver,
+    MeasuredPoints,
+    OutsideRangeWarning,
+    last_motion_direction,
+    nominal_robot,
+    predict,
+)
 from rapidfix.kinematics import RobotModel
 
 #: a context variable must vary by more than this to drive an effect

@@ -11,8 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from rapidfix.error_model.effect import Geometry
-from rapidfix.kinematics import RobotModel
-from rapidfix.kinematics.screws import revolute_exp
+from rapidfix.kinematics import RobotModel, revolute_exp
 
 
 def _per_pose(a: np.ndarray, n: int, tail: tuple[int, ...]) -> np.ndarray:

@@ -6,6 +6,9 @@ Robot models are TOML files (`robots/`); `load_robot` finds them by name or path
 Knows nothing of RAPID or of error models.
 """
 
+from typing import TYPE_CHECKING
+
+from rapidfix import lazy_exports
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
 from rapidfix.kinematics.robot_file import (
     available_robots,
@@ -16,13 +19,38 @@ from rapidfix.kinematics.robot_file import (
 )
 from rapidfix.kinematics.robot_model import RobotModel
 
+if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
+    from rapidfix.kinematics.frames import matrix_to_quat, pose, pose_to_pos_quat
+    from rapidfix.kinematics.ik import prepare
+    from rapidfix.kinematics.screws import invert_transform, revolute_exp
+
+# The other exports, name -> module of this package: each is imported from its module on
+# first use (PEP 562), so exporting a name costs nothing until it is used.
+# To add one: ARCHITECTURE.md, "Exports".
+LAZY_EXPORTS = {
+    "invert_transform": "screws",
+    "matrix_to_quat": "frames",
+    "pose": "frames",
+    "pose_to_pos_quat": "frames",
+    "prepare": "ik",
+    "revolute_exp": "screws",
+}
+
 __all__ = [
     "IKSolutions",
     "IKStatus",
     "RobotModel",
     "available_robots",
+    "invert_transform",
     "is_shipped",
     "load_robot",
+    "matrix_to_quat",
     "parse_robot",
+    "pose",
+    "pose_to_pos_quat",
+    "prepare",
     "read_robot_file",
+    "revolute_exp",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, LAZY_EXPORTS)

@@ -12,7 +12,9 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from rapidfix import lazy_exports
 from rapidfix.link.faults import LinkFaults
 from rapidfix.link.protocol import PROTOCOL_VERSION
 from rapidfix.link.simulator import SimulatedController
@@ -28,7 +30,20 @@ from rapidfix.link.uploader import (
 
 RECEIVER_MODULE = Path(__file__).parent / "rapid" / "RfxRecv.mod"
 
+if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
+    from rapidfix.link.protocol import MAX_PAYLOAD, OVERHEAD
+
+# The other exports, name -> module of this package: each is imported from its module on
+# first use (PEP 562), so exporting a name costs nothing until it is used.
+# To add one: ARCHITECTURE.md, "Exports".
+LAZY_EXPORTS = {
+    "MAX_PAYLOAD": "protocol",
+    "OVERHEAD": "protocol",
+}
+
 __all__ = [
+    "MAX_PAYLOAD",
+    "OVERHEAD",
     "PROTOCOL_VERSION",
     "RECEIVER_MODULE",
     "LinkFaults",
@@ -41,3 +56,5 @@ __all__ = [
     "plan_upload",
     "upload_file",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, LAZY_EXPORTS)

@@ -22,7 +22,45 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
 """
 
+from typing import TYPE_CHECKING
+
+from rapidfix import lazy_exports
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.rewrite import RewriteOptions, RewriteResult, rewrite_file, rewrite_source
 
-__all__ = ["Compensator", "RewriteOptions", "RewriteResult", "rewrite_file", "rewrite_source"]
+if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
+    from rapidfix.postprocess.batch import RAPID_SUFFIXES, BatchSettings, run_batch, write_summary
+    from rapidfix.postprocess.emission_forms import robtarget_literals
+    from rapidfix.postprocess.execute import Execution, align_axis1, commanded_motions
+
+# The other exports, name -> module of this package: each is imported from its module on
+# first use (PEP 562), so exporting a name costs nothing until it is used.
+# To add one: ARCHITECTURE.md, "Exports".
+LAZY_EXPORTS = {
+    "RAPID_SUFFIXES": "batch",
+    "BatchSettings": "batch",
+    "Execution": "execute",
+    "align_axis1": "execute",
+    "commanded_motions": "execute",
+    "robtarget_literals": "emission_forms",
+    "run_batch": "batch",
+    "write_summary": "batch",
+}
+
+__all__ = [
+    "RAPID_SUFFIXES",
+    "BatchSettings",
+    "Compensator",
+    "Execution",
+    "RewriteOptions",
+    "RewriteResult",
+    "align_axis1",
+    "commanded_motions",
+    "rewrite_file",
+    "rewrite_source",
+    "robtarget_literals",
+    "run_batch",
+    "write_summary",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, LAZY_EXPORTS)

@@ -209,9 +209,10 @@ def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
             return _from_summary(rel, header.summary if header else "")
         result = rewrite_file(source, target, comp, settings.options,
                               in_place=settings.in_place, name=rel)
-        if not result.written:  # --strict and something could not be compensated
+        if not result.written:  # strict options and something could not be compensated
             status = "error"
-            note = f"{len(result.skipped)} target(s) cannot be compensated (--strict): not written"
+            note = (f"{len(result.skipped)} target(s) cannot be compensated "
+                    "(RewriteOptions(strict=True)): not written")
         else:
             status = "warnings" if result.skipped or result.warnings else "ok"
             note = result.warnings[0] if result.warnings and not result.skipped else ""
@@ -256,13 +257,15 @@ def run_batch(
         dst_root = src_root
     else:
         if out_dir is None:
-            raise OutputExistsError("an output folder is needed unless --in-place is given")
+            raise OutputExistsError(
+                "an output folder is needed unless BatchSettings(in_place=True) is given")
         dst_root = Path(out_dir)
         a, b = src_root.resolve(), dst_root.resolve()
         if a == b or a in b.parents:
             raise OutputExistsError(
                 "the output folder must not be the input folder or inside it",
-                file=dst_root, hint="use --in-place to rewrite the inputs, keeping backups",
+                file=dst_root,
+                hint="use BatchSettings(in_place=True) to rewrite the inputs, keeping backups",
             )
     files = discover(src_root)
     if settings.in_place:

@@ -11,8 +11,7 @@ previous iteration); the rewrite treats it accordingly.
 
 from __future__ import annotations
 
-from rapidfix.rapid import Program
-from rapidfix.rapid import syntax as s
+from rapidfix.rapid import Assignment, ProcedureCall, Program, Routine, Statement
 
 
 def predecessors(program: Program) -> list[int]:
@@ -21,10 +20,10 @@ def predecessors(program: Program) -> list[int]:
     index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
     user_routines = {r.name.lower() for r in program.routines}
     result = [-1] * len(program.motions)
-    stack: list[list[s.Statement]] = []
+    stack: list[list[Statement]] = []
     for module in program.syntax.modules:
         for item in module.items:
-            if isinstance(item, s.Routine):
+            if isinstance(item, Routine):
                 stack.append(item.body)
                 stack.extend(h.body for h in item.handlers)
     while stack:
@@ -39,9 +38,9 @@ def predecessors(program: Program) -> list[int]:
             if nested:
                 stack.extend(nested)
                 previous = -1
-            elif isinstance(statement, s.ProcedureCall):
+            elif isinstance(statement, ProcedureCall):
                 if statement.key in user_routines:
                     previous = -1
-            elif not isinstance(statement, s.Assignment):
+            elif not isinstance(statement, Assignment):
                 previous = -1
     return result

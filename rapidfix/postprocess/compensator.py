@@ -12,11 +12,9 @@ from pathlib import Path
 from typing import Any
 
 from rapidfix.digest import sha256_bytes, sha256_file
-from rapidfix.error_model.model import ErrorModel
-from rapidfix.error_model.model_file import load_model
+from rapidfix.error_model import ErrorModel, load_model
 from rapidfix.exceptions import KinematicsError, ModelError
-from rapidfix.kinematics import RobotModel, load_robot, parse_robot
-from rapidfix.kinematics.ik import prepare
+from rapidfix.kinematics import RobotModel, load_robot, parse_robot, prepare
 
 
 @dataclass
@@ -47,7 +45,7 @@ class Compensator:
         and the declaration files; refuse a model made for another robot."""
         model = load_model(model_path)
         if robot is not None and robot_file is not None:
-            raise KinematicsError("give either --robot or --robot-file, not both")
+            raise KinematicsError("give either robot or robot_file, not both")
         if robot is None and robot_file is None and model.robot_definition is not None:
             robot_model = parse_robot(model.robot_definition, f"{model_path} (robot_definition)")
         else:

@@ -17,7 +17,7 @@ cannot:
   the direction it had. Where the move before is not known before run time (the
   first move of a routine, a loop body or an IF branch), the direction is
   unknown and effects take the value midway between the directions.
-- **Temperature** of the cell, as the user states it (`--temperature`).
+- **Temperature** of the cell, as the user states it (`RewriteOptions.temperature_c`).
 - **Configuration monitoring** (`ConfL`/`ConfJ \\Off`), followed like the load: with
   it off, the controller reaches a target on the configuration nearest the one it
   is in, not necessarily the one its confdata names (`config_monitoring`).
@@ -31,13 +31,18 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.error_model.context import STILL_RAD, Context
+from rapidfix.error_model import STILL_RAD, Context
 from rapidfix.postprocess.plan import FreeConfiguration
 from rapidfix.postprocess.resolve import Declarations
-from rapidfix.rapid import Program
-from rapidfix.rapid import syntax as s
-from rapidfix.rapid.system_data import SYSTEM_DATA
-from rapidfix.rapid.values import typed_value
+from rapidfix.rapid import (
+    SYSTEM_DATA,
+    NameRef,
+    ProcedureCall,
+    Program,
+    Routine,
+    Statement,
+    typed_value,
+)
 
 _UNKNOWN = "unknown"
 #: calls deeper than this are taken as "load not known" (recursion guard)
@@ -94,15 +99,15 @@ class _StateWalk:
         """The state when either a or b can reach a statement."""
         return _join(a, b)
 
-    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+    def step(self, call: ProcedureCall, state: Any, routine: str) -> Any:
         """The state after a call that is not a routine of the program."""
         return state
 
-    def _routine_nodes(self) -> list[s.Routine]:
+    def _routine_nodes(self) -> list[Routine]:
         return [item for module in self.program.syntax.modules for item in module.items
-                if isinstance(item, s.Routine)]
+                if isinstance(item, Routine)]
 
-    def body(self, statements: list[s.Statement], state: Any, routine: str, depth: int) -> Any:
+    def body(self, statements: list[Statement], state: Any, routine: str, depth: int) -> Any:
         """Walk one statement list from `state`; the state after it."""
         for statement in statements:
             k = self.index_of.get(id(statement))
@@ -118,7 +123,7 @@ class _StateWalk:
                         self.body(inner, self.join(state, end), routine, depth)
                     after = self.join(after, end)
                 state = after
-            elif isinstance(statement, s.ProcedureCall):
+            elif isinstance(statement, ProcedureCall):
                 if statement.key in self.routines:
                     state = self.call(statement.key, state, depth + 1)
                 else:
@@ -162,7 +167,7 @@ class _LoadWalk(_StateWalk):
 
     def load_named(self, expr: Any, routine: str) -> Any:
         """The Load an argument names, or unknown when it is not a static loaddata."""
-        if not isinstance(expr, s.NameRef):
+        if not isinstance(expr, NameRef):
             return _UNKNOWN
         decl = self.program.declaration(expr.name, routine)
         data = None
@@ -180,7 +185,7 @@ class _LoadWalk(_StateWalk):
             return NO_LOAD
         return Load(expr.name, float(data.mass), tuple(float(c) for c in data.cog))
 
-    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+    def step(self, call: ProcedureCall, state: Any, routine: str) -> Any:
         if call.key != "gripload":
             return state
         self.seen.add(id(call))
@@ -203,7 +208,7 @@ class _ConfWalk(_StateWalk):
     def join(self, a: Any, b: Any) -> Any:
         return tuple(x if x == y else None for x, y in zip(a, b))
 
-    def step(self, call: s.ProcedureCall, state: Any, routine: str) -> Any:
+    def step(self, call: ProcedureCall, state: Any, routine: str) -> Any:
         slot = _MONITOR_CALLS.get(call.key)
         if slot is None:
             return state

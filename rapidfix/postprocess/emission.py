@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.error_model.context import Context
+from rapidfix.error_model import Context
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission_forms import (
     joint_edits,
@@ -33,9 +33,7 @@ from rapidfix.postprocess.refinement import PathRefinement
 from rapidfix.postprocess.reparse_changes import CheckUnits
 from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
-from rapidfix.rapid import Program
-from rapidfix.rapid.edit import Editor
-from rapidfix.rapid.format import format_declaration
+from rapidfix.rapid import Editor, Program, format_declaration
 
 #: optional arguments left off the intermediate points of a subdivided move
 INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})

@@ -18,10 +18,9 @@ import re
 
 import numpy as np
 
-from rapidfix.kinematics.frames import pose_to_pos_quat
+from rapidfix.kinematics import pose_to_pos_quat
 from rapidfix.postprocess.resolve import Site
-from rapidfix.rapid import MotionInstruction, Program
-from rapidfix.rapid.format import format_num, format_robtarget
+from rapidfix.rapid import MotionInstruction, Program, format_num, format_robtarget
 
 _JOINTS = "[[" + ",".join(["%.6f"] * 6) + "],"
 

@@ -15,8 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.kinematics import RobotModel
-from rapidfix.kinematics.ik_result import IKStatus
+from rapidfix.kinematics import IKStatus, RobotModel
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
 from rapidfix.postprocess.resolve import Declarations, operand_data, resolve

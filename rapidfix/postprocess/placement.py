@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.kinematics.screws import invert_transform
+from rapidfix.kinematics import invert_transform
 
 
 @dataclass(frozen=True)

@@ -14,12 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.error_model.compensate import solve_compensation
-from rapidfix.error_model.context import Context
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import Context, ErrorModel, solve_compensation
 from rapidfix.exceptions import ModelError
-from rapidfix.kinematics import RobotModel
-from rapidfix.kinematics.ik_result import IKStatus
+from rapidfix.kinematics import IKStatus, RobotModel
 from rapidfix.postprocess.placement import Placement
 
 REASONS = {

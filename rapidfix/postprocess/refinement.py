@@ -16,8 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rapidfix.error_model.context import Context
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import Context, ErrorModel
 from rapidfix.kinematics import RobotModel
 from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.conditions import arrival_directions

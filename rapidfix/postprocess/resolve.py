@@ -16,10 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from rapidfix.kinematics.frames import pose
+from rapidfix.kinematics import pose
 from rapidfix.postprocess.placement import Placement, shared
-from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program
-from rapidfix.rapid.values import ToolData, WobjData
+from rapidfix.rapid import Declaration, MotionInstruction, Operand, Program, ToolData, WobjData
 
 #: instructions that become MoveAbsJ (instruction key -> path kind)
 JOINT_FORM = {"movel": "L", "movej": "J", "movec": "C"}
@@ -78,7 +77,7 @@ class Targets:
 
 
 class Declarations:
-    """Data declared outside the program (the --decls files), by lower-case name."""
+    """Data declared outside the program (Compensator.load(decl_files)), by lower-case name."""
 
     def __init__(self, programs: list[Program]) -> None:
         self._by_name: dict[str, Declaration] = {}
@@ -109,7 +108,7 @@ def operand_data(operand: Operand | None, type_name: str, outside: Declarations)
             return data, ""
     reason = operand.reason or "not known before run time"
     if _UNDECLARED in reason:
-        reason += " (pass the file that declares it with --decls)"
+        reason += " (pass the file that declares it with Compensator.load(decl_files))"
     return None, reason
 
 
@@ -166,7 +165,8 @@ def _instruction_kind(motion: MotionInstruction, emit: str) -> tuple[bool, str, 
         return True, JOINT_FORM.get(key, "X"), None
     kind = JOINT_FORM.get(key)
     if kind is None:
-        return True, "X", f"{motion.name} has no joint-target form (use --emit robtargets)"
+        return True, "X", (f"{motion.name} has no joint-target form "
+                            "(use RewriteOptions(emit='robtargets'))")
     return True, kind, None
 
 

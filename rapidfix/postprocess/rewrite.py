@@ -51,8 +51,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
 from rapidfix.postprocess.resolve import Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Program, parse_program
-from rapidfix.rapid.edit import Editor
+from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 
@@ -232,8 +231,9 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                      "takes the configuration nearest the one it is in: compensated on that "
                      f"one, which differs from the confdata written for {other} of them")
     if options.temperature_c is not None and "temp_c" not in needs:
-        notes.append(f"--temperature {options.temperature_c:g} °C: no effect of the model "
-                     "depends on the cell temperature, so it changes nothing (recorded only)")
+        notes.append(f"RewriteOptions.temperature_c {options.temperature_c:g} °C: no effect of "
+                     "the model depends on the cell temperature, so it changes nothing "
+                     "(recorded only)")
     for eff in model.robot_effects:
         fields = eff.context_fields()
         reference = getattr(eff, "reference", None)
@@ -244,7 +244,7 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                                            else "assumed_reference")
                 warnings.append(
                     f"the model's {eff.name} depends on the cell temperature and no "
-                    f"--temperature was given: assumed the calibration's {assumed}")
+                    f"RewriteOptions.temperature_c was given: assumed the calibration's {assumed}")
             else:
                 record["temperature_c"] = f"{options.temperature_c:g}"
         if "time_s" in fields:
@@ -253,6 +253,26 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                 f"the model's {eff.name} depends on the time since the robot started, which "
                 "a program cannot know: taken at the calibration's reference time")
     return notes, warnings, record
+
+
+def _foreign_call_warnings(program: Program) -> list[str]:
+    """One warning per procedure that is not a motion instruction rapidfix knows nor a
+    routine of the program, yet is passed targets: they are left as written."""
+    by_name: dict[str, list] = {}
+    for call in foreign_target_calls(program):
+        by_name.setdefault(call.name.lower(), []).append(call)
+    warnings = []
+    for calls in by_name.values():
+        first = program.span(calls[0].start, calls[0].start).location
+        names = list(dict.fromkeys(t if len(t) <= 40 else t[:36] + " ..."
+                                   for call in calls for t in call.targets))
+        shown = ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+        more = f" ({len(calls)} calls)" if len(calls) > 1 else ""
+        warnings.append(
+            f"{first}: {calls[0].name}{more} is not a motion instruction rapidfix knows nor a "
+            f"routine of this program: the targets passed to it ({shown}) are left as "
+            "written; if it moves the robot to them, those moves are not compensated")
+    return warnings
 
 
 def _predicted_before(comp: Compensator, targets: Targets, p: Plan
@@ -281,7 +301,7 @@ def _module_indent(program: Program) -> str:
 
 
 def _strip_old_header(editor: Editor, text: str) -> None:
-    """Remove the header lines of an earlier compensation (with --force)."""
+    """Remove the header lines of an earlier compensation (RewriteOptions(force=True))."""
     for match in re.finditer(r"\r?\n[ \t]*![ \t]*" + MARK + r"[^\r\n]*", text):
         editor.replace((match.start(), match.end()), "")
 
@@ -303,7 +323,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
         raise RapidSemanticError(
             f"already compensated by rapidfix {old.version} (model {old.model_path})",
             file=filename,
-            hint="use --force to compensate it again",
+            hint="use RewriteOptions(force=True) to compensate it again",
         )
     planned = plan_program(program, comp, options.emit,
                            temperature_c=options.temperature_c, approach=options.approach)
@@ -326,6 +346,7 @@ def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOpti
     summary = (f"{compensated} of {len(planned.sites)} moves compensated, {points} points "
                f"added, {len(skipped)} left as they were")
     notes, warnings, conditions = _run_statement(comp, planned, refined.solved, options)
+    warnings.extend(_foreign_call_warnings(program))
     header = Header(
         version=__version__,
         model_path=comp.model_path,
@@ -395,8 +416,9 @@ def rewrite_file(
     source, target = Path(source), Path(target)
     same = target.exists() and source.exists() and target.resolve() == source.resolve()
     if same and not in_place:
-        raise OutputExistsError("the output would overwrite the input", file=target,
-                                hint="choose another -o, or use --in-place (keeps a backup)")
+        raise OutputExistsError(
+            "the output would overwrite the input", file=target,
+            hint="choose another target, or pass in_place=True (keeps a backup)")
     data = source.read_bytes()
     result = rewrite_source(data, name or str(source), comp, options)
     if result.skipped and options.strict:

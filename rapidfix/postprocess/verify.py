@@ -16,16 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapidfix.error_model.context import Context
-from rapidfix.error_model.model import ErrorModel
+from rapidfix.error_model import Context, ErrorModel
 from rapidfix.exceptions import RapidfixError, RapidSemanticError
-from rapidfix.kinematics import RobotModel
-from rapidfix.kinematics.frames import pose
+from rapidfix.kinematics import RobotModel, pose
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
 from rapidfix.postprocess.reparse_changes import CheckUnits
-from rapidfix.rapid import MotionInstruction
-from rapidfix.rapid.readback import ReadBack, read_targets_full, read_targets_in_bulk
+from rapidfix.rapid import MotionInstruction, ReadBack, read_targets_full, read_targets_in_bulk
 
 
 @dataclass(frozen=True)

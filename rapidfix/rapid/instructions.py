@@ -76,6 +76,17 @@ WRITING_PROCEDURES: dict[str, tuple[int, ...]] = {
     "readvararr": (2,),
 }
 
+
+# Procedures that take targets without moving the robot to them: a world zone's
+# joint limits, the recorded positions of a tool calibration, data read, written,
+# packed or sent (and every procedure of WRITING_PROCEDURES).
+NON_MOVING_PROCEDURES = frozenset({
+    "wzhomejointdef", "wzlimjointdef", "mtooltcpcalib", "mtoolrotcalib", "stooltcpcalib",
+    "stoolrotcalib", "writeanybin", "setdataval", "setalldataval", "packrawbytes",
+    "rmqsendmessage", "rmqsendwait", "writevar", "writecfgdata",
+    *WRITING_PROCEDURES,
+})
+
 # Functions whose value is known only at run time (a reason, not a guess).
 RUNTIME_FUNCTIONS = frozenset({
     "crobt", "cjointt", "calcrobt", "calcjointt", "readnum", "readstr", "readbin",

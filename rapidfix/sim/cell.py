@@ -27,7 +27,7 @@ from scipy.spatial.transform import Rotation
 from rapidfix.atomic import write_text_atomic
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.kinematics import RobotModel
-from rapidfix.measure.files import (
+from rapidfix.measure import (
     PointTable,
     Setup,
     SweepTable,

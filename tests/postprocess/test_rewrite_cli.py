@@ -124,3 +124,108 @@ def test_options_are_refused_in_the_library_words_and_in_the_command_words(
     message = capsys.readouterr().err
     assert status == 1 and "--temperature 400 °C is not a cell temperature" in message
     assert "temperature_c" not in message
+
+
+def test_library_notes_hints_and_reasons_name_options_the_cli_names_flags(
+        cell, program, tmp_path, capsys):
+    """What the library says names its own options (a caller writes RewriteOptions(force=True));
+    what the command prints of it names the flag (`--force`), word for word otherwise."""
+    from rapidfix.exceptions import RapidSemanticError
+    from rapidfix.postprocess import Compensator, RewriteOptions, rewrite_file, rewrite_source
+
+    comp = Compensator.load(cell["model_path"])
+    model = str(cell["model_path"])
+    warm = tmp_path / "warm.mod"
+    result = rewrite_file(program, warm, comp, RewriteOptions(temperature_c=25.0))
+    note = ("RewriteOptions.temperature_c 25 °C: no effect of the model depends on the cell "
+            "temperature, so it changes nothing (recorded only)")
+    assert note in result.notes
+    assert main(["rewrite", str(program), "--model", model, "-o", str(tmp_path / "w2.mod"),
+                 "--temperature", "25"]) == 0
+    printed = capsys.readouterr().out
+    assert "  --temperature 25 °C: no effect of the model depends" in printed
+    assert "RewriteOptions" not in printed
+
+    with pytest.raises(RapidSemanticError) as err:
+        rewrite_source(warm.read_bytes(), "warm.mod", comp, RewriteOptions())
+    assert err.value.hint == "use RewriteOptions(force=True) to compensate it again"
+    assert main(["rewrite", str(warm), "--model", model, "-o", str(tmp_path / "x.mod")]) == 1
+    assert capsys.readouterr().err.endswith(
+        f"{warm}: {err.value.message} (use --force to compensate it again)\n")
+
+    station = (USES_OUTSIDE_DATA.replace("EXTAX", EXTAX)
+               .replace("  ENDPROC", "    SearchL \\Stop, di1, pA, pA, v100, tool0;\n  ENDPROC"))
+    result = rewrite_source(station.encode(), "station.mod", comp, RewriteOptions())
+    reasons = [skipped.reason for skipped in result.skipped]
+    assert any(r.endswith("(pass the file that declares it with Compensator.load(decl_files))")
+               for r in reasons)
+    assert "SearchL has no joint-target form (use RewriteOptions(emit='robtargets'))" in reasons
+    prog = tmp_path / "station.mod"
+    prog.write_text(station)
+    assert main(["rewrite", str(prog), "--model", model, "-o", str(tmp_path / "s.mod")]) == 3
+    err_text = capsys.readouterr().err
+    assert "(pass the file that declares it with --decls)" in err_text
+    assert "SearchL has no joint-target form (use --emit robtargets)" in err_text
+    assert "RewriteOptions" not in err_text and "Compensator" not in err_text
+
+
+def test_the_library_names_no_command_line_flag():
+    """No message of the post-processor (a string in its code) names a command-line flag:
+    the commands put the flags in (rapidfix.commands.rewrite.FLAGS)."""
+    import ast
+    import re
+    from pathlib import Path
+
+    import rapidfix.postprocess
+
+    flag = re.compile(r"(?<![\w-])--[a-z][\w-]*")
+    found = []
+    for path in sorted(Path(rapidfix.postprocess.__file__).parent.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                found += [f"{path.name}:{node.lineno}: {m.group()}"
+                          for m in flag.finditer(node.value)]
+    assert not found, "\n".join(found)
+
+
+def test_every_flag_of_the_table_is_put_in_where_the_library_names_its_option():
+    from rapidfix.commands.rewrite import FLAGS, in_cli_words
+
+    for words, flag in FLAGS.items():
+        assert in_cli_words(f"use {words} here ({words})") == f"use {flag} here ({flag})"
+    assert in_cli_words("target pA: no RewriteOptions here") == "target pA: no RewriteOptions here"
+
+
+SEARCHES = """MODULE Seam
+  CONST robtarget p10:=[[600,0,700],[0,0,1,0],[0,0,0,0],EXTAX];
+  CONST robtarget p20:=[[600,100,700],[0,0,1,0],[0,0,0,0],EXTAX];
+  PERS tooldata tWeld:=[TRUE,[[0,0,200],[1,0,0,0]],[2,[0,0,100],[1,0,0,0],0,0,0]];
+  VAR pose found;
+  PROC main()
+    MoveL p10, v100, fine, tWeld;
+    Search_1D found, p10, p20, v200, tWeld;
+    MoveL p20, v100, fine, tWeld;
+  ENDPROC
+ENDMODULE
+""".replace("EXTAX", EXTAX)
+
+
+def test_targets_passed_to_an_unknown_procedure_are_named_and_left_as_written(
+        cell, tmp_path, capsys):
+    """A SmarTac search is not a motion rapidfix knows: its targets stay as written, and
+    the user is told where (exit 3), not left to find out on the robot."""
+    src, out = tmp_path / "seam.mod", tmp_path / "out.mod"
+    src.write_text(SEARCHES)
+    assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert f"{src}:8:5: Search_1D is not a motion instruction rapidfix knows" in err
+    assert "(p10, p20) are left as written" in err
+    written = out.read_text()
+    assert "    Search_1D found, p10, p20, v200, tWeld;\n" in written
+    assert "CONST robtarget p10:=[[600,0,700]," in written  # still declared, unchanged
+    assert "MoveL p10" not in written  # the moves themselves are compensated
+    # without the search, nothing to say: exit 0
+    src.write_text(SEARCHES.replace("    Search_1D found, p10, p20, v200, tWeld;\n", ""))
+    assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o", str(out),
+                 "--force"]) == 0
+    assert "not a motion instruction" not in capsys.readouterr().err

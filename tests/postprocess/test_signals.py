@@ -34,11 +34,25 @@ def program_and_reference(cell, tmp_path_factory):
     src = folder / "long.mod"
     src.write_text(long_program(MOVES))
     ref = folder / "reference.mod"
+    start = time.monotonic()
     done = subprocess.run([*CLI, "rewrite", str(src), "--model", str(cell["model_path"]),
                            "-o", str(ref)], capture_output=True, text=True, env=_env(),
                           timeout=300)
     assert done.returncode == 0, done.stderr
-    return src, ref.read_bytes()
+    return src, ref.read_bytes(), time.monotonic() - start
+
+
+def _catches_sigterm(pid: int) -> bool:
+    """Whether `pid` has a SIGTERM handler installed (Linux /proc: the SigCgt mask). rapidfix's
+    `main` installs one when it starts and puts the old one back when it ends, so this tells
+    the moment the command runs, whatever the interpreter's start-up took."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = next((line.split()[1] for line in status.splitlines()
+                 if line.startswith("SigCgt:")), "0")
+    return bool(int(mask, 16) >> (signal.SIGTERM - 1) & 1)
 
 
 def _children(pid: int) -> list[int]:
@@ -63,8 +77,12 @@ def _temporaries(folder: Path) -> list[Path]:
 
 
 def _run_and_signal(args: list[str], sig: signal.Signals, delay: float) -> tuple[int, str]:
+    """Start `rapidfix ARGS`, wait until its `main` runs, then `delay` s more, and signal it."""
     proc = subprocess.Popen([*CLI, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, env=_env(), preexec_fn=ctrl_c_as_at_a_terminal)
+    started = time.monotonic() + 120
+    while proc.poll() is None and not _catches_sigterm(proc.pid) and time.monotonic() < started:
+        time.sleep(0.002)
     end = time.monotonic() + delay
     while proc.poll() is None and time.monotonic() < end:
         time.sleep(0.01)
@@ -85,11 +103,11 @@ def _run_and_signal(args: list[str], sig: signal.Signals, delay: float) -> tuple
                          ids=["SIGINT", "SIGTERM", "SIGKILL"])
 def test_interrupted_run_leaves_complete_output_or_nothing(cell, program_and_reference,
                                                            tmp_path, command, sig):
-    src, reference = program_and_reference
+    src, reference, duration = program_and_reference
     rng = random.Random(f"{command}-{sig.name}")
-    # a moment while it works: the interpreter's own start-up (before rapidfix runs, when
-    # Python itself answers Ctrl-C) takes up to a second on a loaded machine
-    delay = rng.uniform(1.5, 4.5)
+    # a moment while it works, counted from when rapidfix's main runs (before that Python
+    # itself answers Ctrl-C), scaled by how long the uninterrupted rewrite took here
+    delay = rng.uniform(0.1, 0.7) * duration
     model = str(cell["model_path"])
     if command == "rewrite":
         out_dir = tmp_path / "out"
