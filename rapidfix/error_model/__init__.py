@@ -48,6 +48,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.error_model.candidates.tool_offset import ToolOffset
     from rapidfix.error_model.context import STILL_RAD, last_motion_direction
     from rapidfix.error_model.fit import fit_error_model, sweep_gaps
+    from rapidfix.error_model.joint_rbf import compiled_sums
     from rapidfix.error_model.fit_effects import (
         EffectsFit,
         MeasuredPoints,
@@ -79,6 +80,7 @@ LAZY_EXPORTS = {
     "ToolOffset": "candidates.tool_offset",
     "TrackerFrame": "candidates.registration",
     "TrackerScale": "candidates.registration",
+    "compiled_sums": "joint_rbf",
     "error_names": "candidates.geometry",
     "feature_label": "candidates.rbf_correction",
     "feature_values": "candidates.rbf_correction",
@@ -122,6 +124,7 @@ __all__ = [
     "TrackerFrame",
     "TrackerScale",
     "compensate",
+    "compiled_sums",
     "error_names",
     "feature_label",
     "feature_values",

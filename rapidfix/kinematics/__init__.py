@@ -20,20 +20,29 @@ from rapidfix.kinematics.robot_file import (
 from rapidfix.kinematics.robot_model import RobotModel
 
 if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
-    from rapidfix.kinematics.frames import matrix_to_quat, pose, pose_to_pos_quat
+    from rapidfix.kinematics.frames import (
+        matrix_to_quat,
+        matrix_to_rotvec,
+        pose,
+        pose_to_pos_quat,
+        rotvec_to_matrix,
+    )
     from rapidfix.kinematics.ik import prepare
-    from rapidfix.kinematics.screws import invert_transform, revolute_exp
+    from rapidfix.kinematics.screws import compiled_forward, invert_transform, revolute_exp
 
 # The other exports, name -> module of this package: each is imported from its module on
 # first use (PEP 562), so exporting a name costs nothing until it is used.
 # To add one: ARCHITECTURE.md, "Exports".
 LAZY_EXPORTS = {
+    "compiled_forward": "screws",
     "invert_transform": "screws",
     "matrix_to_quat": "frames",
+    "matrix_to_rotvec": "frames",
     "pose": "frames",
     "pose_to_pos_quat": "frames",
     "prepare": "ik",
     "revolute_exp": "screws",
+    "rotvec_to_matrix": "frames",
 }
 
 __all__ = [
@@ -41,16 +50,19 @@ __all__ = [
     "IKStatus",
     "RobotModel",
     "available_robots",
+    "compiled_forward",
     "invert_transform",
     "is_shipped",
     "load_robot",
     "matrix_to_quat",
+    "matrix_to_rotvec",
     "parse_robot",
     "pose",
     "pose_to_pos_quat",
     "prepare",
     "read_robot_file",
     "revolute_exp",
+    "rotvec_to_matrix",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, LAZY_EXPORTS)

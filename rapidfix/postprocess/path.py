@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rapidfix import chunks
-from rapidfix.kinematics.frames import matrix_to_rotvec, rotvec_to_matrix
+from rapidfix.kinematics import matrix_to_rotvec, rotvec_to_matrix
 
 #: interior fractions of an interval where its deviation is sampled
 SAMPLE_FRACTIONS = np.linspace(0.0, 1.0, 7)[1:-1]

@@ -34,14 +34,14 @@ import numpy as np
 from rapidfix import __version__
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.digest import sha256_bytes
-from rapidfix.error_model.joint_rbf import compiled_sums
+from rapidfix.error_model import compiled_sums
 from rapidfix.exceptions import (
     InvalidOption,
     OutputExistsError,
     RapidSemanticError,
 )
 from rapidfix.gc_pause import cyclic_gc_paused
-from rapidfix.kinematics.screws import compiled_forward
+from rapidfix.kinematics import compiled_forward
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission import emit_edits, indent_before
 from rapidfix.postprocess.header import MARK, Header, read_header
