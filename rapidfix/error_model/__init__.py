@@ -48,7 +48,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.error_model.candidates.tool_offset import ToolOffset
     from rapidfix.error_model.context import STILL_RAD, last_motion_direction
     from rapidfix.error_model.fit import fit_error_model, sweep_gaps
-    from rapidfix.error_model.joint_rbf import compiled_sums
     from rapidfix.error_model.fit_effects import (
         EffectsFit,
         MeasuredPoints,
@@ -56,6 +55,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
         jacobian,
         predict,
     )
+    from rapidfix.error_model.joint_rbf import compiled_sums
 
 # The other exports, name -> module of this package: each is imported from its module on
 # first use (PEP 562), so exporting a name costs nothing until it is used.
