@@ -174,7 +174,7 @@ def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, em
         assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
     needs = model.context_fields()
     if "temp_c" in needs and temperature is None:
-        assert any("--temperature" in w for w in result.warnings)
+        assert any("RewriteOptions.temperature_c" in w for w in result.warnings)
     if "temp_c" in needs and temperature is not None:
         assert result.header.conditions["temperature_c"] == "23.5"
     if "temp_c" not in needs and temperature is not None and result.moves_compensated:
