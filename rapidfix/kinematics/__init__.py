@@ -27,7 +27,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
         pose_to_pos_quat,
         rotvec_to_matrix,
     )
-    from rapidfix.kinematics.ik import prepare
+    from rapidfix.kinematics.ik import numpy_closed_form, prepare
     from rapidfix.kinematics.screws import compiled_forward, invert_transform, revolute_exp
 
 # The other exports, name -> module of this package: each is imported from its module on
@@ -39,6 +39,7 @@ LAZY_EXPORTS = {
     "matrix_to_quat": "frames",
     "matrix_to_rotvec": "frames",
     "pose": "frames",
+    "numpy_closed_form": "ik",
     "pose_to_pos_quat": "frames",
     "prepare": "ik",
     "revolute_exp": "screws",
@@ -56,6 +57,7 @@ __all__ = [
     "load_robot",
     "matrix_to_quat",
     "matrix_to_rotvec",
+    "numpy_closed_form",
     "parse_robot",
     "pose",
     "pose_to_pos_quat",

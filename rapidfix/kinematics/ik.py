@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import lru_cache
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -47,6 +50,20 @@ RIGID_TOL = 1e-6
 _FIXED_POINT_STEPS = 6
 BACKEND_ENV = "RAPIDFIX_IK_BACKEND"
 """Environment variable choosing the closed-form code: auto (default), numpy or numba."""
+
+_AUTO_NUMPY: ContextVar[bool] = ContextVar("rapidfix_ik_auto_numpy", default=False)
+
+
+@contextmanager
+def numpy_closed_form() -> Iterator[None]:
+    """Inside the block, "auto" solves in numpy: for work too small to pay for loading
+    the compiled kernel (numba reads its cached machine code on first use, about half a
+    second, more than numpy takes for ten thousand poses)."""
+    token = _AUTO_NUMPY.set(True)
+    try:
+        yield
+    finally:
+        _AUTO_NUMPY.reset(token)
 
 
 def turn_counts(limits: np.ndarray) -> tuple[int, ...]:
@@ -205,7 +222,8 @@ def backend_for(model: RobotModel, backend: str | None = None) -> str:
 
     `backend` None reads the environment variable RAPIDFIX_IK_BACKEND (default
     "auto"). "auto" takes the compiled kernel when numba is importable and the
-    model is nominal (an actual model's refinement is numpy). Asking for "numba"
+    model is nominal (an actual model's refinement is numpy), except inside
+    `numpy_closed_form`. Asking for "numba"
     without numba installed raises KinematicsError.
     """
     if backend is None:
@@ -214,7 +232,7 @@ def backend_for(model: RobotModel, backend: str | None = None) -> str:
         raise KinematicsError(f"unknown IK backend {backend!r} (auto, numpy, numba)")
     if backend == "numba" and not accelerated():
         raise KinematicsError("the numba IK backend needs numba: pip install 'rapidfix[fast]'")
-    if backend == "numpy" or not model.is_nominal:
+    if backend == "numpy" or not model.is_nominal or (backend == "auto" and _AUTO_NUMPY.get()):
         return "numpy"
     return "numba" if accelerated() else "numpy"
 

@@ -14,7 +14,7 @@ from typing import Any
 from rapidfix.digest import sha256_bytes, sha256_file
 from rapidfix.error_model import ErrorModel, load_model
 from rapidfix.exceptions import KinematicsError, ModelError
-from rapidfix.kinematics import RobotModel, load_robot, parse_robot, prepare
+from rapidfix.kinematics import RobotModel, load_robot, parse_robot
 
 
 @dataclass
@@ -61,5 +61,4 @@ class Compensator:
 
         paths = [str(p) for p in (decl_files or [])]
         decls = [load_program(p) for p in paths]
-        prepare(robot_model)  # a batch's files then share the kernels' one-time load
         return cls(robot_model, model, str(model_path), sha256_file(model_path), decls, paths)

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,7 +43,7 @@ from rapidfix.exceptions import (
     RapidSemanticError,
 )
 from rapidfix.gc_pause import cyclic_gc_paused
-from rapidfix.kinematics import compiled_forward
+from rapidfix.kinematics import compiled_forward, numpy_closed_form
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission import emit_edits, indent_before
 from rapidfix.postprocess.header import MARK, Header, read_header
@@ -54,6 +56,8 @@ from rapidfix.postprocess.verify import predicted_deviation, read_back
 from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
+#: programs with this many moves or more are solved with the compiled kernels (numba)
+COMPILED_FROM_MOVES = 10_000
 
 
 @dataclass(frozen=True)
@@ -311,13 +315,29 @@ def rewrite_source(
     data: bytes, filename: str, comp: Compensator, options: RewriteOptions
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done."""
-    with cyclic_gc_paused(), compiled_sums(), compiled_forward():
-        return _rewrite(data, filename, comp, options)
+    with cyclic_gc_paused():
+        program = parse_program(data, filename)
+        with _kernels_for(len(program.motions)):
+            return _rewrite(program, data, filename, comp, options)
 
 
-def _rewrite(data: bytes, filename: str, comp: Compensator, options: RewriteOptions
-             ) -> RewriteResult:
-    program = parse_program(data, filename)
+@contextmanager
+def _kernels_for(moves: int) -> Iterator[None]:
+    """The compiled kernels (IK, forward kinematics, RBF sums) for a program of at least
+    COMPILED_FROM_MOVES moves, numpy's below: their one-time load costs more than they
+    save on a small program. Chosen by the program alone, so the same program gives the
+    same bytes whatever a process (a batch worker) rewrote before."""
+    with ExitStack() as stack:
+        if moves >= COMPILED_FROM_MOVES:
+            stack.enter_context(compiled_sums())
+            stack.enter_context(compiled_forward())
+        else:
+            stack.enter_context(numpy_closed_form())
+        yield
+
+
+def _rewrite(program: Program, data: bytes, filename: str, comp: Compensator,
+             options: RewriteOptions) -> RewriteResult:
     old = read_header(program.text)
     if old is not None and not options.force:
         raise RapidSemanticError(

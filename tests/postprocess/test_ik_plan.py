@@ -38,11 +38,20 @@ def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell
     assert {0, 1, 4}.issubset(set(np.asarray(got_status).tolist()))
 
 
-def test_loading_a_compensator_prepares_its_robot(cell, monkeypatch):
-    """The compiled IK kernel's one-time load happens with the model, not in a rewrite."""
-    from rapidfix.postprocess import compensator
+def test_small_programs_solve_in_numpy_large_ones_with_the_compiled_kernels(cell):
+    """The compiled kernels' one-time load (about half a second) costs more than they save
+    on a small program: below COMPILED_FROM_MOVES moves the rewrite stays in numpy. The
+    choice is the program's alone, not what the process ran before."""
+    from rapidfix.error_model import joint_rbf
+    from rapidfix.kinematics import ik, screws
+    from rapidfix.postprocess import rewrite
 
-    prepared = []
-    monkeypatch.setattr(compensator, "prepare", prepared.append)
-    comp = compensator.Compensator.load(cell["model_path"])
-    assert prepared == [comp.robot]
+    robot = cell["robot"]
+    assert robot.is_nominal
+    with rewrite._kernels_for(rewrite.COMPILED_FROM_MOVES - 1):
+        assert ik.backend_for(robot) == "numpy"
+        assert not screws._COMPILED.get() and not joint_rbf._COMPILED.get()
+    with rewrite._kernels_for(rewrite.COMPILED_FROM_MOVES):
+        assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
+        assert screws._COMPILED.get() and joint_rbf._COMPILED.get()
+    assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
