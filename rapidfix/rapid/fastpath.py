@@ -265,23 +265,26 @@ _WS_CHARS = " \t\f\v\r\n\x1a"
 
 
 def _call_node(text: str, start: int) -> s.Call:
-    """The Call node of checked function call text `Name(args)` at `start`."""
+    """The Call node of checked function call text `Name(args)` at `start`: its first
+    argument, and the rest as a tail read once per distinct text (a LazyFunctionCall,
+    like split_calls' LazyCall: `Offs(p1,0,0,10)` and `Offs(p2,0,0,10)` share `,0,0,10)`)."""
     open_at = text.index("(")
     name = text[:open_at].rstrip(_WS_CHARS)
-    args: list[s.Argument] = []
-    for piece in _INNER_PIECE.finditer(text, open_at + 1):
-        slash, option, option_value, value, close = piece.groups()
-        if value is not None:
-            node = _value_node(value, start + piece.start(4))
-            args.append(s.Argument(node.start, node.end, "required", None, node))
-        elif slash is not None:
-            node = None if option_value is None else _value_node(option_value,
-                                                                 start + piece.start(3))
-            args.append(s.Argument(start + piece.start(1), start + piece.end(), "optional",
-                                   option, node))
-        elif close is not None:
-            break
-    return s.Call(start, start + len(text), sys.intern(name), args)
+    first = _INNER_PIECE.match(text, open_at + 1)
+    value = first.group(4)
+    if value is None:  # an optional argument first, or no argument
+        head, tail_at = None, open_at + 1
+    else:
+        node = _value_node(value, start + first.start(4))
+        head = s.Argument(node.start, node.end, "required", None, node)
+        tail_at = first.end()
+    tail_text = text[tail_at:]
+    tail = _INNER_TAILS.get(tail_text)
+    if tail is None:
+        tail = CallTail(tail_text, _INNER_PIECE)
+        _INNER_TAILS.keep(tail_text, tail)
+    return s.LazyFunctionCall(start, start + len(text), sys.intern(name), head, tail,
+                              start + tail_at)
 
 
 def _value_node(text: str, start: int) -> s.Expr:
@@ -310,6 +313,10 @@ def _moved(node: Any, shift: int) -> Any:
     if isinstance(node, s.Unary):
         return s.Unary(node.start + shift, node.end + shift, node.op,
                        _moved(node.operand, shift))
+    if isinstance(node, s.LazyFunctionCall):
+        return s.LazyFunctionCall(node.start + shift, node.end + shift, node.name,
+                                  None if node.head is None else _moved(node.head, shift),
+                                  node.tail, node.shift + shift)
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
@@ -345,10 +352,11 @@ def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
     return _nested, start, node.end, (node,)
 
 
-def _tail(text: str) -> tuple[_TailArgument, ...]:
-    """The arguments in checked call text that follows a call's name or first argument."""
+def _tail(text: str, pieces: re.Pattern[str]) -> tuple[_TailArgument, ...]:
+    """The arguments in checked call text that follows a call's name or first argument,
+    split by `pieces` (CALL_PIECE, or _INNER_PIECE inside a function call)."""
     entries: list[_TailArgument] = []
-    for piece in CALL_PIECE.finditer(text):
+    for piece in pieces.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
             node, at, end, fields = _value_entry(value, piece.start(4))
@@ -367,12 +375,12 @@ def _tail(text: str) -> tuple[_TailArgument, ...]:
 class CallTail:
     """The arguments after a call's name or first argument, read once per distinct
     text and made into nodes for every call that ends with that text
-    (rapidfix.rapid.syntax.LazyCall)."""
+    (rapidfix.rapid.syntax.LazyCall, LazyFunctionCall)."""
 
     __slots__ = ("entries",)
 
-    def __init__(self, text: str) -> None:
-        self.entries = _tail(text)
+    def __init__(self, text: str, pieces: re.Pattern[str] = CALL_PIECE) -> None:
+        self.entries = _tail(text, pieces)
 
     def arguments(self, shift: int) -> list[s.Argument]:
         """The Argument nodes of the tail standing at offset `shift`."""
@@ -383,8 +391,10 @@ class CallTail:
                 in self.entries]
 
 
-# Distinct call tails kept across tokens and files (a CAM program has a few dozen).
+# Distinct call tails kept across tokens and files (a CAM program has a few dozen),
+# of procedure calls and of function calls.
 _TAILS: Memo = Memo(TAIL_LIMIT)
+_INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:

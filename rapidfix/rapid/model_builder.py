@@ -115,8 +115,11 @@ class ModelBuilder:
         self.writes: dict[int, list[_Write]] = {}
         self.state: dict[int, bool] = {}  # False while evaluating, True when done
         self.evaluators: dict[tuple[str, str | None], Evaluator] = {}
+        self.settled = False  # True once every declaration is resolved (pass 3)
         # (module, routine, type hint) -> data name as spelt -> what an Operand of it holds
         self.name_operands: dict[tuple[str, str, str | None], dict[str, tuple]] = {}
+        # (module, routine, type hint) -> operand text -> _operand_fields of it
+        self.operand_texts: dict[tuple[str, str | None, str | None], dict[str, tuple]] = {}
         self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool]] = []
         # procedure name as spelt -> (motion spec, positions and names it writes into)
         self.call_kinds: dict[str, tuple[MotionSpec | None, set[int], set[str]]] = {}
@@ -197,8 +200,22 @@ class ModelBuilder:
         key = (module, routine)
         evaluator = self.evaluators.get(key)
         if evaluator is None:
+            known: dict[str, TypedValue | NotConstant] = {}
+
             def lookup(name: str) -> TypedValue:
-                return self._lookup(name, module, routine)
+                # once every declaration is resolved, a name's value no longer changes
+                # (before, a declaration may be in the middle of its own evaluation)
+                found = known.get(name)
+                if found is None:
+                    try:
+                        found = self._lookup(name, module, routine)
+                    except NotConstant as err:
+                        found = err
+                    if self.settled:
+                        known[name] = found
+                if type(found) is NotConstant:
+                    raise NotConstant(found.reason)
+                return found
             evaluator = self.evaluators[key] = Evaluator(lookup, self.records)
         return evaluator
 
@@ -355,23 +372,41 @@ class ModelBuilder:
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
         text = self.source.text[expr.start:expr.end]
+        # the same text in the same scope has the same form, value and declaration
+        # (every declaration is resolved before the motions are made): read it once
+        texts = self.operand_texts.get((module, routine, type_hint))
+        if texts is None:
+            texts = self.operand_texts[(module, routine, type_hint)] = {}
+        known = texts.get(text)
+        if known is None:
+            known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
+        return Operand(arg, self.source, text, *known)
+
+    def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,
+                        routine: str | None) -> tuple:
+        """(form, name, type name, value, static, reason, declaration) of an operand
+        expression that is not a plain data name."""
         base = expr
         if isinstance(expr, (s.Aggregate, s.NumericAggregate)):
             form = "inline"
         elif isinstance(expr, s.Call) and expr.key in ("offs", "reltool"):
             form = expr.key
-            required = [a for a in expr.args if a.kind == "required"]
-            base = required[0].value if required else None
+            head = expr.head if type(expr) is s.LazyFunctionCall else None
+            if head is not None:  # its first argument, without making the others
+                base = head.value
+            else:
+                required = [a for a in expr.args if a.kind == "required"]
+                base = required[0].value if required else None
         else:
             form = "expression"
         name_ref = base if isinstance(base, s.NameRef) else None
-        operand = Operand(arg, self.source, text, form,
-                          name=name_ref.name if name_ref else None, type_name=type_hint)
+        declaration = None
         if name_ref is not None:
-            operand.declaration = self._declaration_named(name_ref, module, routine)
-        cached = self._evaluate_operand(expr, type_hint, module, routine)
-        operand.value, operand.type_name, operand.static, operand.reason = cached
-        return operand
+            declaration = self._declaration_named(name_ref, module, routine)
+        value, type_name, static, reason = self._evaluate_operand(expr, type_hint, module,
+                                                                  routine)
+        return (form, name_ref.name if name_ref else None, type_name, value, static, reason,
+                declaration)
 
     def _declaration_named(self, name_ref: s.NameRef, module: str,
                            routine: str | None) -> Declaration | None:
@@ -546,6 +581,7 @@ class ModelBuilder:
                 state[key] = True
             else:
                 resolve(decl)
+        self.settled = True
         self.program.motions = self._motions()
         # The evaluators' lookups refer back to this builder: break that cycle so
         # that reference counting frees the builder's tables at once.

@@ -84,6 +84,34 @@ class Call(Node):
         return self.name.lower()
 
 
+_FUNCTION_ARGS = Call.__dict__["args"]  # the slot, under LazyFunctionCall's property
+
+
+class LazyFunctionCall(Call):
+    """A function call `Name(args)` whose arguments after the first are a shared `tail`
+    (see LazyCall): `Offs(p1,0,0,10)`, `RelTool(p2,0,0,5 \\Rz:=90)` differ from call to
+    call mostly in their first argument. `args` is the list a Call holds, made when
+    first asked for; the evaluator reads `head` and the tail's values without it."""
+
+    __slots__ = ("head", "shift", "tail")
+
+    def __init__(self, start: int, end: int, name: str, head: Argument | None,
+                 tail: ArgumentTail, shift: int) -> None:
+        self.start, self.end, self.name = start, end, name
+        self.head, self.tail, self.shift = head, tail, shift
+
+    @property  # type: ignore[override]
+    def args(self) -> list[Argument]:
+        try:
+            return _FUNCTION_ARGS.__get__(self)
+        except AttributeError:
+            args = self.tail.arguments(self.shift)
+            if self.head is not None:
+                args.insert(0, self.head)
+            _FUNCTION_ARGS.__set__(self, args)
+            return args
+
+
 @dataclass(slots=True, eq=False)
 class Unary(Node):
     op: str  # '-', '+', 'NOT'

@@ -26,7 +26,7 @@ from rapidfix.rapid.fastpath import (
 )
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.source import decode_source
-from rapidfix.rapid.syntax import ProcedureCall
+from rapidfix.rapid.syntax import Call, ProcedureCall
 from rapidfix.rapid.transform import numeric_aggregate_value
 
 UNUSED = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
@@ -37,8 +37,10 @@ def shape(node: object) -> object:
     """A syntax tree as nested tuples: node type, then every field."""
     if dataclasses.is_dataclass(node):
         return (
-            # a LazyCall is a ProcedureCall whose args are made when asked for
-            "ProcedureCall" if isinstance(node, ProcedureCall) else type(node).__name__,
+            # a LazyCall is a ProcedureCall (a LazyFunctionCall a Call) whose args are
+            # made when asked for
+            "ProcedureCall" if isinstance(node, ProcedureCall)
+            else "Call" if isinstance(node, Call) else type(node).__name__,
             *(shape(getattr(node, f.name)) for f in dataclasses.fields(node)),
         )
     if isinstance(node, (list, tuple)):
