@@ -342,14 +342,19 @@ _TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple]
 
 def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
     """(node type, start, end, other fields) of the node _value_node makes."""
-    node = _value_node(text, start)
+    return _node_entry(_value_node(text, start), start)
+
+
+def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
+    """(node type, start, end, other fields) of a value node, standing at `start`."""
+    end = start + node.end - node.start
     if isinstance(node, s.Number):
-        return s.Number, start, node.end, (node.value, node.text)
+        return s.Number, start, end, (node.value, node.text)
     if isinstance(node, s.NumericAggregate):
-        return s.NumericAggregate, start, node.end, (node.value,)
+        return s.NumericAggregate, start, end, (node.value,)
     if isinstance(node, s.NameRef):
-        return s.NameRef, start, node.end, (node.name,)
-    return _nested, start, node.end, (node,)
+        return s.NameRef, start, end, (node.name,)
+    return _nested, start, end, (node,)
 
 
 def _tail(text: str, pieces: re.Pattern[str]) -> tuple[_TailArgument, ...]:
@@ -379,8 +384,36 @@ class CallTail:
 
     __slots__ = ("entries",)
 
-    def __init__(self, text: str, pieces: re.Pattern[str] = CALL_PIECE) -> None:
-        self.entries = _tail(text, pieces)
+    def __init__(self, text: str | None, pieces: re.Pattern[str] = CALL_PIECE) -> None:
+        self.entries = () if text is None else _tail(text, pieces)
+
+    def after_first(self) -> CallTail | None:
+        """The tail of the arguments after this tail's first, when that is a required
+        value (None otherwise): what CallTail reads from the text after it."""
+        entries = self.entries
+        if not entries or entries[0][0] != "required":
+            return None
+        cut = entries[0][2]
+        rest = CallTail(None)
+        rest.entries = tuple(
+            (kind, start - cut, end - cut, option, node, value_start - cut, value_end - cut,
+             fields)
+            for kind, start, end, option, node, value_start, value_end, fields in entries[1:])
+        return rest
+
+    def with_first(self, node: s.Expr, cut: int) -> CallTail:
+        """This tail after a required value `node` (its text `cut` characters long after
+        the start of the new tail, the separator included): what CallTail reads from
+        the text of both."""
+        start = cut - (node.end - node.start)
+        kind, at, end, fields = _node_entry(node, start)
+        both = CallTail(None)
+        both.entries = (("required", at, end, None, kind, at, end, fields), *(
+            (kind, start + cut, end + cut, option, node, value_start + cut, value_end + cut,
+             fields)
+            for kind, start, end, option, node, value_start, value_end, fields
+            in self.entries))
+        return both
 
     def arguments(self, shift: int) -> list[s.Argument]:
         """The Argument nodes of the tail standing at offset `shift`."""
@@ -400,38 +433,60 @@ _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
 
-    A call is its name, perhaps a first argument, and a tail of further
-    arguments. In a CAM program the first argument (the target) changes from line
-    to line but the tail (speed, zone, tool, work object) recurs, so each
-    distinct tail is read once (CallTail), and each call is a LazyCall that makes
-    the tail's nodes, shifted to where it stands, only when they are asked for.
-    Names are interned.
+    A call is its name, its leading arguments and a tail of further arguments. In
+    a CAM program the first argument (the target) changes from line to line but
+    the tail (speed, zone, tool, work object) recurs, so each distinct tail is
+    read once (CallTail), and each call is a LazyCall that makes the tail's nodes,
+    shifted to where it stands, only when they are asked for. When the text after
+    the first argument is new but the text after the second is known (MoveC's two
+    targets, or any call whose second argument varies too), the call's tail is
+    taken after its second argument. Names are interned.
     """
     calls: list[s.ProcedureCall] = []
     tails = _TAILS
     argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
-    head, find = _CALL_HEAD.match, text.index
+    head, find, piece_at = _CALL_HEAD.match, text.index, CALL_PIECE.match
     pos, size = 0, len(text)
     while pos < size:
         m = head(text, pos)
         first = m.group(2)
+        tail_at = m.end()
+        pos = find(";", tail_at) + 1
+        tail_text = text[tail_at:pos]
+        tail = tails.get(tail_text)
         if first is None:
-            head_arg = None
+            heads: tuple[s.Argument, ...] = ()
         else:
             at = base + m.start(2)
             if first[0].isalpha() and first[-1] != ")":
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
-            head_arg = argument(at, node.end, "required", None, node)
-        tail_at = m.end()
-        pos = find(";", tail_at) + 1
-        tail_text = text[tail_at:pos]
-        tail = tails.get(tail_text)
+            heads = (argument(at, node.end, "required", None, node),)
+            if tail is None:
+                piece = piece_at(text, tail_at)
+                second = piece.group(4)
+                if second is not None:
+                    rest_at = piece.end()
+                    rest_text = text[rest_at:pos]
+                    rest = tails.get(rest_text)
+                    if rest is not None:  # the rest is known: two leading arguments
+                        at = base + piece.start(4)
+                        node = _value_node(second, at)
+                        heads = (heads[0], argument(at, node.end, "required", None, node))
+                        # and the tail after the first, for calls that repeat all of it
+                        tails.keep(tail_text, rest.with_first(node, rest_at - tail_at))
+                        tail, tail_at = rest, rest_at
+                    else:
+                        tail = CallTail(tail_text)
+                        tails.keep(tail_text, tail)
+                        rest = tail.after_first()
+                        if rest is not None:
+                            tails.keep(rest_text, rest)
         if tail is None:
             tail = CallTail(tail_text)
             tails.keep(tail_text, tail)
-        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
+        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), heads,
                                tail, base + tail_at))
     return calls
 

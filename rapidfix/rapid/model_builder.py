@@ -73,22 +73,27 @@ _Layout = tuple[tuple[str, "str | None", dict], ...]
 
 
 class _SharedTail:
-    """The operands after the target that calls with the same tail share within a
+    """The operands after the targets that calls with the same tail share within a
     routine: their Operands are made (around each call's own argument nodes) only
     when a move's `arguments` or `optional` are asked for."""
 
-    __slots__ = ("entries", "target_key")
+    __slots__ = ("entries", "head_keys", "head_of_target", "target_of_head")
 
-    def __init__(self, target_key: str, entries: tuple[tuple[bool, str, Operand], ...]
-                 ) -> None:
-        self.target_key = target_key
+    def __init__(self, head_keys: tuple[str, ...], target_keys: tuple[str, ...],
+                 entries: tuple[tuple[bool, str, Operand], ...]) -> None:
+        self.head_keys = head_keys  # the parameter of each leading argument (a target)
+        order = [key for key in target_keys if key in head_keys]
+        self.target_of_head = tuple(order.index(key) for key in head_keys)
+        self.head_of_target = tuple(head_keys.index(key) for key in order)
         self.entries = entries  # per tail argument: (optional, key, operand of the first call)
 
     def operands(self, motion: MotionInstruction) -> tuple[dict[str, Operand],
                                                           dict[str, Operand]]:
-        arguments = {self.target_key: motion.targets[0]}
+        targets = motion.targets
+        arguments = {key: targets[i] for key, i in zip(self.head_keys, self.target_of_head)}
         optional: dict[str, Operand] = {}
-        for (is_optional, key, first), arg in zip(self.entries, motion.syntax.args[1:]):
+        for (is_optional, key, first), arg in zip(self.entries,
+                                                  motion.syntax.args[len(self.head_keys):]):
             (optional if is_optional else arguments)[key] = Operand(
                 arg, first.source, first.text, first.form, first.name, first.type_name,
                 first.value, first.static, first.reason, first.declaration)
@@ -470,12 +475,14 @@ class ModelBuilder:
                      arguments: dict[str, Operand], optional: dict[str, Operand]
                      ) -> _SharedTail | None:
         """What every call with this call's tail (in the same routine) shares, when its
-        first argument is its only target and the rest are data names or switches."""
-        if call.head is None or not layout or layout[0][0] not in spec.target_keys:
+        leading arguments are its only targets and the rest are data names or switches."""
+        n_heads = len(call.heads)
+        if not n_heads or len(layout) < n_heads or any(
+                layout[i][0] not in spec.target_keys for i in range(n_heads)):
             return None
         entries = []
-        index = 1
-        for arg in call.args[1:]:
+        index = n_heads
+        for arg in call.args[n_heads:]:
             # data names, and switches (optional arguments without a value)
             if type(arg.value) is not s.NameRef and not (
                     arg.value is None and arg.kind == "optional"):
@@ -488,7 +495,25 @@ class ModelBuilder:
                 entries.append((False, key, arguments[key]))
             else:
                 entries.append((True, arg.key, optional[arg.key]))
-        return _SharedTail(layout[0][0], tuple(entries))
+        return _SharedTail(tuple(layout[i][0] for i in range(n_heads)), spec.target_keys,
+                           tuple(entries))
+
+    def _head_operands(self, heads: tuple[s.Argument, ...], layout: _Layout,
+                       shared: _SharedTail, module: str, rkey: str) -> list[Operand]:
+        """The target operands of a call's leading arguments, in the order of its
+        instruction's targets (CirPoint before ToPoint)."""
+        targets = []
+        for (_, hint, cache), head in zip(layout, heads):
+            expr = head.value
+            if type(expr) is s.NameRef:
+                name = expr.name
+                cached = cache.get(name)
+                if cached is None:
+                    cached = cache[name] = self._name_operand(expr, hint, module, rkey)
+                targets.append(Operand(head, self.source, name, "name", name, *cached))
+            else:
+                targets.append(self._operand(head, hint, module, rkey))
+        return [targets[i] for i in shared.head_of_target]
 
     def _motions(self) -> list[MotionInstruction]:
         """The MotionInstructions of the calls found in pass 2, in program order.
@@ -524,26 +549,30 @@ class ModelBuilder:
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
             if type(call) is lazy_call:
-                tail = id(call.tail)
+                heads = call.heads
+                tail = (id(call.tail), len(heads))
                 shared = shared_tails.get(tail, False)
                 if shared is False:  # the first call with this tail: made in full
                     arguments, optional = operands(call, layout, module, rkey)
                     shared = shared_tails[tail] = self._shared_tail(
                         call, spec, layout, arguments, optional)
                 elif shared is not None:
-                    head = call.head
-                    expr = head.value
-                    if type(expr) is name_ref:
-                        name = expr.name
-                        cached = head_cache.get(name)
-                        if cached is None:
-                            cached = head_cache[name] = self._name_operand(
-                                expr, head_hint, module, rkey)
-                        target = operand(head, source, name, "name", name, *cached)
+                    if len(heads) == 1:  # the usual case: one target
+                        head = heads[0]
+                        expr = head.value
+                        if type(expr) is name_ref:
+                            name = expr.name
+                            cached = head_cache.get(name)
+                            if cached is None:
+                                cached = head_cache[name] = self._name_operand(
+                                    expr, head_hint, module, rkey)
+                            targets = [operand(head, source, name, "name", name, *cached)]
+                        else:
+                            targets = [self._operand(head, head_hint, module, rkey)]
                     else:
-                        target = self._operand(head, head_hint, module, rkey)
+                        targets = self._head_operands(heads, layout, shared, module, rkey)
                     motions.append(motion(call.name, spec, module_names[module], routine,
-                                          call, source, [target], in_loop, shared))
+                                          call, source, targets, in_loop, shared))
                     continue
                 else:
                     arguments, optional = operands(call, layout, module, rkey)

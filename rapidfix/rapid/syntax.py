@@ -191,20 +191,21 @@ _CALL_ARGS = ProcedureCall.__dict__["args"]  # the slot, under the property belo
 
 
 class LazyCall(ProcedureCall):
-    """A ProcedureCall whose arguments after the first are a shared `tail`, shifted
-    to where this call stands; its `args` are made when first asked for.
+    """A ProcedureCall whose leading arguments `heads` (one, or two when the second
+    changes from call to call too, as MoveC's two targets) are followed by a shared
+    `tail`, shifted to where this call stands; its `args` are made when first asked for.
 
-    A CAM program's hundred thousand moves differ only in their first argument,
-    and most readers never look past it: the nodes of the rest are made on demand.
-    `args` is the same list of nodes a ProcedureCall holds (`head` first).
+    A CAM program's hundred thousand moves differ only in their targets, and most
+    readers never look past them: the nodes of the rest are made on demand.
+    `args` is the same list of nodes a ProcedureCall holds (`heads` first).
     """
 
-    __slots__ = ("head", "shift", "tail")
+    __slots__ = ("heads", "shift", "tail")
 
-    def __init__(self, start: int, end: int, name: str, head: Argument | None,
+    def __init__(self, start: int, end: int, name: str, heads: tuple[Argument, ...],
                  tail: ArgumentTail, shift: int) -> None:
         self.start, self.end, self.name = start, end, name
-        self.head, self.tail, self.shift = head, tail, shift
+        self.heads, self.tail, self.shift = heads, tail, shift
 
     @property  # type: ignore[override]
     def args(self) -> list[Argument]:
@@ -212,8 +213,8 @@ class LazyCall(ProcedureCall):
             return _CALL_ARGS.__get__(self)
         except AttributeError:
             args = self.tail.arguments(self.shift)
-            if self.head is not None:
-                args.insert(0, self.head)
+            if self.heads:
+                args[0:0] = self.heads
             _CALL_ARGS.__set__(self, args)
             return args
 

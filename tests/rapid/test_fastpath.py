@@ -197,6 +197,16 @@ MIXED = {
         "  IF a <SMT>", "  TEST a", "  <CSE>", "  ENDTEST", "ENDPROC",
         "PROC p(<PAR>, \\<ALT>)", "ENDPROC", "<RDN>",
     ),
+    "calls whose second argument varies too": routine(
+        # the text after the first argument is new, after the second known: two
+        # leading arguments and a shared tail; then the same call again, one
+        "MoveL p1, v100, z1, tool0;", "MoveC c1, p2, v100, z1, tool0;",
+        "MoveC c2, p3, v100, z1, tool0;", "MoveL p4, v200, z1, tool0;",
+        "MoveL p5, v200, z1, tool0;", "MoveC Offs(c1,0,1,0), -1, v100, z1, tool0;",
+        "MoveC c1, RelTool(p2,0,0,1 \\Rz:=5), v100, z1, tool0;", "MoveC c1, p2, v100, z1, tool0;",
+        "Foo 1, [1,2], \\A, v100, z1, tool0;", "Foo 1, [1,2],v100, z1, tool0;",
+        "Foo 2, [1,2],v100, z1, tool0;",
+    ),
     "ISO 8859-1 letters in names": module(
         f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
         "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
@@ -328,6 +338,9 @@ PIECES = [
     "Foo ;;",
     "Bar",
     "MoveL pÑ,v100,z1,tool0;",
+    "MoveC c1,p2,v100,z1,tool0;",
+    "MoveC Offs(c1,0,1,0), p3 ,v100,z1,tool0;",
+    "MoveC c1,-1,v100,z1,tool0 \\WObj:=w;",
     "Foo Añ, ñ \\Ø:=é;",
     "<SMT>",
     "MoveL <ARG>,v1,z1,t;",

@@ -121,6 +121,22 @@ def test_asking_for_the_arguments_makes_them_once():
     assert motion.syntax.args[0] is motion.targets[0].argument
 
 
+def test_moves_whose_second_argument_varies_share_their_tail():
+    # MoveC's two targets: the text after the first is new on every line, after the
+    # second it recurs; the moves then share what follows their two targets
+    lines = [f"CONST robtarget {n}{i}:={TARGET};" for i in range(4) for n in "cd"]
+    moves = [f"    MoveC c{i},d{i},v100,z1,gun\\WObj:=table;" for i in range(4)]
+    text = CELL.replace("  PROC main()\n", "  " + "\n  ".join(lines) + "\n  PROC main()\n"
+                        + "\n".join(moves) + "\n")
+    program = assert_same_model(text)
+    circles = [m for m in program.motions if m.name == "MoveC" and m.syntax.start
+               < text.index("MoveL p1,v100")]
+    assert len(circles) == 4
+    assert all(m.shared is circles[1].shared is not None for m in circles[1:])
+    assert [[t.name for t in m.targets] for m in circles] == [
+        ["c0", "d0"], ["c1", "d1"], ["c2", "d2"], ["c3", "d3"]]
+
+
 MOVES = [
     "MoveL p1,v100,z1,gun\\WObj:=table;",
     "MoveL p2,v100,z1,gun\\WObj:=table;",
@@ -133,6 +149,11 @@ MOVES = [
     "MoveL p2,v100,z1,gun\\T:=2;",
     f"MoveL {TARGET},v100,z1,gun;",
     "MoveC p1,p2,v100,z1,gun;",
+    "MoveC p2,p1,v100,z1,gun;",
+    "MoveC Offs(p1,0,1,0),p2,v100,z1,gun\\WObj:=table;",
+    "MoveC p2,RelTool(p1,0,0,1),v100,z1,gun\\WObj:=table;",
+    "MoveL p1,v200,z1,gun\\WObj:=table;",
+    "MoveL Offs(p2,0,0,-1),v200,z1,gun\\WObj:=table;",
     "MoveL p1,v100,z1,gun\\TLoad:=load0;",
     "SetDO do1, 1;",
     "gun.tframe.trans.z:=1;",
