@@ -62,11 +62,20 @@ _WORD_END = rf"(?![A-Za-z0-9_{_LATIN1_LETTERS}])"
 # number characters are taken whole (one step of the regex engine, not one per
 # character); as they hold no bracket, this never backtracks.
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
+# An aggregate of such aggregates, three levels deep, each item two levels deep (an
+# array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
+_ITEM = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)+\]"
+_DEEP_AGGREGATE = rf"\[{WS}*{_ITEM}(?:{WS}*,{WS}*{_ITEM})*{WS}*\]"
+# How a three-level aggregate of the fast terminals starts (a two-level one never does).
+_DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # A value without a call, for splitting a token whose syntax has been checked already:
-# an aggregate, a negated number, a name or a number.
-_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
-# A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
-VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|{_SIMPLE_TEXT}"
+# an aggregate (up to three levels), a negated number, a name or a number.
+_SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
+                rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
+# A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
+# (`path{3}`, `grid{i,2}`) or one of them.
+VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|[A-Za-z][A-Za-z0-9_]*{WS}*\{{[^{{}}]*\}}"
+              rf"|{_SIMPLE_TEXT}")
 
 
 class NotFast(Exception):
@@ -131,11 +140,17 @@ def _patterns() -> dict[str, str]:
     following = rf"(?:,{WS}*|(?=\\))"
     inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
              rf"\)")
-    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{inner})?)"
+    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
+    index_item = f"(?:{number}|{value_name})"
+    index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
+    value = (f"(?:{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}|(?:-{WS}*)?{number}"
+             f"|{value_name}(?:{WS}*(?:{inner}|{index}))?)")
     argument = f"(?:{value}|{optional})"
     call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    # array dimensions: numbers (`{50}`, `{2,3}`)
+    dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
-            f"{data_name}{WS}*(?::={WS}*{value}{WS}*)?;")
+            f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
     return {"call": call, "decl": decl}
 
 
@@ -182,7 +197,8 @@ CALL_PIECE = re.compile(
 
 def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
     """Splits a declaration whose syntax has been checked: (LOCAL, TASK, storage,) type,
-    name and value text; the first three groups only with `modifiers`."""
+    name, (the inside of its dimensions' braces,) and value text; the groups in
+    parentheses only with `modifiers`."""
     def group(pattern: str) -> str:
         return f"({pattern})" if modifiers else pattern
 
@@ -190,6 +206,7 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
         rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
+        rf"(?:\{{{group('[^{}]*')}\}}{WS}*)?"
         rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
 
@@ -293,6 +310,8 @@ def _value_node(text: str, start: int) -> s.Expr:
     end = start + len(text)
     first = text[0]
     if first == "[":
+        if _DEEP_START.match(text):
+            return _deep_aggregate(text, start, _RESTS)
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
         return s.Number(start, end, number_value(text), text)
@@ -302,7 +321,37 @@ def _value_node(text: str, start: int) -> s.Expr:
         return s.Unary(start, operand.end, "-", operand)
     if text[-1] == ")":
         return _call_node(text, start)
+    if text[-1] == "}":
+        return _index_node(text, start)
     return s.NameRef(start, end, sys.intern(text))
+
+
+# An index of an array element, or a dimension: a number or a name.
+_INDEX_ITEM = re.compile(r"[A-Za-z0-9_.+\-]+")
+
+
+def _index_node(text: str, start: int) -> s.Index:
+    """The Index node of checked array element text `name{i, ...}` at `start`."""
+    open_at = text.index("{")
+    name = text[:open_at].rstrip(_WS_CHARS)
+    base = s.NameRef(start, start + len(name), sys.intern(name))
+    indices = [_value_node(m.group(), start + m.start())
+               for m in _INDEX_ITEM.finditer(text, open_at + 1)]
+    return s.Index(start, start + len(text), base, indices)
+
+
+_DEEP_ITEM = re.compile(r"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]")
+
+
+def _deep_aggregate(text: str, start: int, rests: Memo) -> s.Aggregate:
+    """The Aggregate node of a checked three-level aggregate at `start` (an array of
+    robtargets): the grammar reads each item as a NUMERIC_AGGREGATE."""
+    items: list[s.Expr] = []
+    for m in _DEEP_ITEM.finditer(text, 1):
+        at = start + m.start()
+        items.append(s.NumericAggregate(at, start + m.end(),
+                                        shared_aggregate_value(m.group(), rests)))
+    return s.Aggregate(start, start + len(text), items)
 
 
 def _moved(node: Any, shift: int) -> Any:
@@ -317,6 +366,12 @@ def _moved(node: Any, shift: int) -> Any:
         return s.LazyFunctionCall(node.start + shift, node.end + shift, node.name,
                                   None if node.head is None else _moved(node.head, shift),
                                   node.tail, node.shift + shift)
+    if isinstance(node, s.Aggregate):
+        return s.Aggregate(node.start + shift, node.end + shift,
+                           [_moved(item, shift) for item in node.items])
+    if isinstance(node, s.Index):
+        return s.Index(node.start + shift, node.end + shift, _moved(node.base, shift),
+                       [_moved(index, shift) for index in node.indices])
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
@@ -458,7 +513,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
             heads: tuple[s.Argument, ...] = ()
         else:
             at = base + m.start(2)
-            if first[0].isalpha() and first[-1] != ")":
+            if first[0].isalpha() and first[-1] not in ")}":
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
@@ -521,19 +576,24 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     rests = _RESTS
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
-        local, task, storage, type_name, name, value = m.groups()
+        local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:
             init = None
-        elif value[0] == "[":
-            at = base + spans[6][0]
+        elif value[0] == "[" and not _DEEP_START.match(value):
+            at = base + spans[7][0]
             init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
         else:
-            init = _value_node(value, base + spans[6][0])
+            init = _value_node(value, base + spans[7][0])
+        if dims is None:
+            sizes: Any = ()
+        else:
+            at = base + spans[6][0]
+            sizes = [_value_node(d.group(), at + d.start()) for d in _INDEX_ITEM.finditer(dims)]
         first = 1 if local is not None else 2 if task is not None else 3
         decls.append(data_decl(
             base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
-            name, base + spans[5][0], (), init, local is not None, task is not None,
+            name, base + spans[5][0], sizes, init, local is not None, task is not None,
         ))
     return decls
 

@@ -207,6 +207,16 @@ MIXED = {
         "Foo 1, [1,2], \\A, v100, z1, tool0;", "Foo 1, [1,2],v100, z1, tool0;",
         "Foo 2, [1,2],v100, z1, tool0;",
     ),
+    "arrays of targets and their elements": module(
+        f"CONST robtarget path{{3}}:=[{TARGET},{TARGET},\n  {TARGET}];",
+        f"VAR robtarget grid{{2,1}} := [ {TARGET} ,\n\t{TARGET} ];",
+        "CONST num n{2}:=[1,2];", "PERS num m{ 3 }:=[[1],[2],[3]];", "VAR num e{2};",
+        "CONST robtarget odd{2}:=[[[1,2]],[[3]]];", "PROC main()",
+        "  MoveL path{1},v100,z1,tool0;", "  MoveL path {n{1}}, v100, z1, tool0;",
+        "  MoveL grid{2, 1},v100,z1,tool0 \\WObj:=w;", "  MoveL path{i},v100,z1,tool0;",
+        "  Foo path{0x2}, e{1} \\A:=n{2};", "  MoveL Offs(path{1},0,0,1),v100,z1,tool0;",
+        "ENDPROC",
+    ),
     "ISO 8859-1 letters in names": module(
         f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
         "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
@@ -339,6 +349,9 @@ PIECES = [
     "Bar",
     "MoveL pÑ,v100,z1,tool0;",
     "MoveC c1,p2,v100,z1,tool0;",
+    "MoveL path{1},v100,z1,tool0;",
+    "Foo grid{i, 2}, [[[1,2]],[[3]]];",
+    "Foo [[[1,2]],[3]];",
     "MoveC Offs(c1,0,1,0), p3 ,v100,z1,tool0;",
     "MoveC c1,-1,v100,z1,tool0 \\WObj:=w;",
     "Foo Añ, ñ \\Ø:=é;",
@@ -352,6 +365,8 @@ DATA = [
     "LOCAL PERS num n:=2;",
     "CONST num m:=-1;",
     "VAR num a{2};",
+    f"CONST robtarget path{{2}}:=[{TARGET},\n {TARGET}];",
+    "VAR num b{2,3}:=[[1,2,3],[4,5,6]];",
     "CONST num q:=[1,2.3.4];",
 ]
 GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]
