@@ -475,7 +475,8 @@ class ModelBuilder:
                      arguments: dict[str, Operand], optional: dict[str, Operand]
                      ) -> _SharedTail | None:
         """What every call with this call's tail (in the same routine) shares, when its
-        leading arguments are its only targets and the rest are data names or switches."""
+        leading arguments are its only targets: the same text in the same scope gives
+        the same operands (data names, switches, `\\V:=120`, any expression)."""
         n_heads = len(call.heads)
         if not n_heads or len(layout) < n_heads or any(
                 layout[i][0] not in spec.target_keys for i in range(n_heads)):
@@ -483,9 +484,7 @@ class ModelBuilder:
         entries = []
         index = n_heads
         for arg in call.args[n_heads:]:
-            # data names, and switches (optional arguments without a value)
-            if type(arg.value) is not s.NameRef and not (
-                    arg.value is None and arg.kind == "optional"):
+            if arg.name is not None and arg.kind == "required":  # `Name:=value`: by name
                 return None
             if arg.kind == "required":
                 key = layout[index][0] if index < len(layout) else f"#{index + 1}"

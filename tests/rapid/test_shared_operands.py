@@ -155,6 +155,10 @@ MOVES = [
     "MoveL p1,v200,z1,gun\\WObj:=table;",
     "MoveL Offs(p2,0,0,-1),v200,z1,gun\\WObj:=table;",
     "MoveL p1,v100,z1,gun\\TLoad:=load0;",
+    "MoveL p1,v100\\V:=120,z10\\Z:=-5,gun;",
+    "MoveL p2,v100\\V:=120,z10\\Z:=-5,gun;",
+    "MoveL p2,v100\\V:=undeclared,z1,gun\\WObj:=[1,2];",
+    "MoveL p1,v100\\V:=undeclared,z1,gun\\WObj:=[1,2];",
     "SetDO do1, 1;",
     "gun.tframe.trans.z:=1;",
 ]
