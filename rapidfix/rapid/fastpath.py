@@ -74,7 +74,7 @@ _SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\
                 rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
 # A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
 # (`path{3}`, `grid{i,2}`) or one of them.
-VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|[A-Za-z][A-Za-z0-9_]*{WS}*\{{[^{{}}]*\}}"
+VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*\)|\{{[^{{}}]*\}}))?"
               rf"|{_SIMPLE_TEXT}")
 
 

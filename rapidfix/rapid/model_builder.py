@@ -377,6 +377,9 @@ class ModelBuilder:
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
         text = self.source.text[expr.start:expr.end]
+        if type(expr) is s.NumericAggregate:  # its value is read already; seldom repeated
+            return Operand(arg, self.source, text, *self._operand_fields(
+                expr, type_hint, module, routine))
         # the same text in the same scope has the same form, value and declaration
         # (every declaration is resolved before the motions are made): read it once
         texts = self.operand_texts.get((module, routine, type_hint))
@@ -549,7 +552,8 @@ class ModelBuilder:
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
             if type(call) is lazy_call:
                 heads = call.heads
-                tail = (id(call.tail), len(heads))
+                # (the same tail after one leading argument or after two is shared apart)
+                tail = id(call.tail) if len(heads) == 1 else (id(call.tail), len(heads))
                 shared = shared_tails.get(tail, False)
                 if shared is False:  # the first call with this tail: made in full
                     arguments, optional = operands(call, layout, module, rkey)
