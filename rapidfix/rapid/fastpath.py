@@ -510,14 +510,14 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         tail_text = text[tail_at:pos]
         tail = tails.get(tail_text)
         if first is None:
-            heads: tuple[s.Argument, ...] = ()
+            head_arg = second_arg = None
         else:
             at = base + m.start(2)
             if first[0].isalpha() and first[-1] not in ")}":
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
-            heads = (argument(at, node.end, "required", None, node),)
+            head_arg, second_arg = argument(at, node.end, "required", None, node), None
             if tail is None:
                 piece = piece_at(text, tail_at)
                 second = piece.group(4)
@@ -528,7 +528,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
                     if rest is not None:  # the rest is known: two leading arguments
                         at = base + piece.start(4)
                         node = _value_node(second, at)
-                        heads = (heads[0], argument(at, node.end, "required", None, node))
+                        second_arg = argument(at, node.end, "required", None, node)
                         # and the tail after the first, for calls that repeat all of it
                         tails.keep(tail_text, rest.with_first(node, rest_at - tail_at))
                         tail, tail_at = rest, rest_at
@@ -541,8 +541,12 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         if tail is None:
             tail = CallTail(tail_text)
             tails.keep(tail_text, tail)
-        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), heads,
-                               tail, base + tail_at))
+        shift = base + tail_at
+        last = head_arg if second_arg is None else second_arg
+        if last is not None and last.end == shift:  # one int object, not two equal ones
+            shift = last.end
+        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
+                               tail, shift, second_arg))
     return calls
 
 
@@ -593,7 +597,8 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
         first = 1 if local is not None else 2 if task is not None else 3
         decls.append(data_decl(
             base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
-            name, base + spans[5][0], sizes, init, local is not None, task is not None,
+            # interned: the moves that name it then hold the same string
+            intern(name), base + spans[5][0], sizes, init, local is not None, task is not None,
         ))
     return decls
 

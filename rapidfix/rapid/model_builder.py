@@ -125,7 +125,7 @@ class ModelBuilder:
         self.name_operands: dict[tuple[str, str, str | None], dict[str, tuple]] = {}
         # (module, routine, type hint) -> operand text -> _operand_fields of it
         self.operand_texts: dict[tuple[str, str | None, str | None], dict[str, tuple]] = {}
-        self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool]] = []
+        self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool] | None] = []
         # procedure name as spelt -> (motion spec, positions and names it writes into)
         self.call_kinds: dict[str, tuple[MotionSpec | None, set[int], set[str]]] = {}
         self.module_names_as_spelt: dict[str, str] = {}
@@ -288,6 +288,8 @@ class ModelBuilder:
 
     # ------------------------------------------------------------ pass 3
     def _resolve(self, decl: Declaration) -> None:
+        if self.settled:  # every declaration is resolved
+            return
         done = self.state.get(id(decl))
         if done:
             return
@@ -350,7 +352,7 @@ class ModelBuilder:
                       routine: str | None) -> tuple:
         """(type name, value, static, reason, declaration) of an Operand that is a data name."""
         found = self._find(expr.name.lower(), module, routine)
-        if type(found) is not Declaration or not self.state.get(id(found)):
+        if type(found) is not Declaration or not (self.settled or self.state.get(id(found))):
             value, type_name, static, reason = self._evaluate_operand(
                 expr, type_hint, module, routine)
             return type_name, value, static, reason, self._declaration_named(
@@ -536,7 +538,9 @@ class ModelBuilder:
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
-        for call, spec, module, routine, in_loop in self.pending:
+        pending = self.pending
+        for index, (call, spec, module, routine, in_loop) in enumerate(pending):
+            pending[index] = None  # its memory is the motion's to use
             if spec.legacy is not None:  # arc welding: Weave required (old) or optional
                 spec = spec.for_call(sum(a.kind == "required" for a in call.args))
             if spec is not last[0] or routine is not last[1] or module is not last[2]:
@@ -551,29 +555,28 @@ class ModelBuilder:
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
             if type(call) is lazy_call:
-                heads = call.heads
+                head = call.head
                 # (the same tail after one leading argument or after two is shared apart)
-                tail = id(call.tail) if len(heads) == 1 else (id(call.tail), len(heads))
+                tail = id(call.tail) if call.second is None else (id(call.tail), 2)
                 shared = shared_tails.get(tail, False)
                 if shared is False:  # the first call with this tail: made in full
                     arguments, optional = operands(call, layout, module, rkey)
                     shared = shared_tails[tail] = self._shared_tail(
                         call, spec, layout, arguments, optional)
                 elif shared is not None:
-                    if len(heads) == 1:  # the usual case: one target
-                        head = heads[0]
+                    if call.second is None:  # the usual case: one target
                         expr = head.value
                         if type(expr) is name_ref:
                             name = expr.name
-                            cached = head_cache.get(name)
-                            if cached is None:
-                                cached = head_cache[name] = self._name_operand(
-                                    expr, head_hint, module, rkey)
+                            # a target name seldom recurs in a CAM program: not kept
+                            cached = head_cache.get(name) or self._name_operand(
+                                expr, head_hint, module, rkey)
                             targets = [operand(head, source, name, "name", name, *cached)]
                         else:
                             targets = [self._operand(head, head_hint, module, rkey)]
                     else:
-                        targets = self._head_operands(heads, layout, shared, module, rkey)
+                        targets = self._head_operands(call.heads, layout, shared, module,
+                                                      rkey)
                     motions.append(motion(call.name, spec, module_names[module], routine,
                                           call, source, targets, in_loop, shared))
                     continue
@@ -614,6 +617,7 @@ class ModelBuilder:
             else:
                 resolve(decl)
         self.settled = True
+        self.state = {}  # not needed any more: its memory is the motions' to use
         self.program.motions = self._motions()
         # The evaluators' lookups refer back to this builder: break that cycle so
         # that reference counting frees the builder's tables at once.

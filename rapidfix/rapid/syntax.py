@@ -191,8 +191,8 @@ _CALL_ARGS = ProcedureCall.__dict__["args"]  # the slot, under the property belo
 
 
 class LazyCall(ProcedureCall):
-    """A ProcedureCall whose leading arguments `heads` (one, or two when the second
-    changes from call to call too, as MoveC's two targets) are followed by a shared
+    """A ProcedureCall whose leading argument `head` (and `second`, when the second
+    changes from call to call too, as MoveC's two targets) is followed by a shared
     `tail`, shifted to where this call stands; its `args` are made when first asked for.
 
     A CAM program's hundred thousand moves differ only in their targets, and most
@@ -200,12 +200,19 @@ class LazyCall(ProcedureCall):
     `args` is the same list of nodes a ProcedureCall holds (`heads` first).
     """
 
-    __slots__ = ("heads", "shift", "tail")
+    __slots__ = ("head", "second", "shift", "tail")
 
-    def __init__(self, start: int, end: int, name: str, heads: tuple[Argument, ...],
-                 tail: ArgumentTail, shift: int) -> None:
+    def __init__(self, start: int, end: int, name: str, head: Argument | None,
+                 tail: ArgumentTail, shift: int, second: Argument | None = None) -> None:
         self.start, self.end, self.name = start, end, name
-        self.heads, self.tail, self.shift = heads, tail, shift
+        self.head, self.second, self.tail, self.shift = head, second, tail, shift
+
+    @property
+    def heads(self) -> tuple[Argument, ...]:
+        """The leading arguments before the tail: none, `head`, or `head` and `second`."""
+        if self.head is None:
+            return ()
+        return (self.head,) if self.second is None else (self.head, self.second)
 
     @property  # type: ignore[override]
     def args(self) -> list[Argument]:
@@ -213,7 +220,7 @@ class LazyCall(ProcedureCall):
             return _CALL_ARGS.__get__(self)
         except AttributeError:
             args = self.tail.arguments(self.shift)
-            if self.heads:
+            if self.head is not None:
                 args[0:0] = self.heads
             _CALL_ARGS.__set__(self, args)
             return args
