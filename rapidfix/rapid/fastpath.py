@@ -603,6 +603,13 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     return decls
 
 
+def forget_texts() -> None:
+    """Empty the texts the fast path keeps across files (call tails, aggregate rests and
+    number groups): their memory back, and the next file read from a known start."""
+    for memo in (_TAILS, _INNER_TAILS, _RESTS, _GROUP_CACHE):
+        memo.clear()
+
+
 @v_args(inline=True)
 class FastSyntaxBuilder(SyntaxBuilder):
     """SyntaxBuilder plus the callbacks of the fast terminals."""

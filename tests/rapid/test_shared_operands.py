@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.fastpath import parse_text
+from rapidfix.rapid.fastpath import forget_texts, parse_text
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.model_builder import build_program
 from rapidfix.rapid.program import Operand, Program
@@ -128,11 +128,13 @@ def test_moves_whose_second_argument_varies_share_their_tail():
     moves = [f"    MoveC c{i},d{i},v100,z1,gun\\WObj:=table;" for i in range(4)]
     text = CELL.replace("  PROC main()\n", "  " + "\n  ".join(lines) + "\n  PROC main()\n"
                         + "\n".join(moves) + "\n")
+    forget_texts()  # the first MoveC then reads its tails, the others find the second one
     program = assert_same_model(text)
     circles = [m for m in program.motions if m.name == "MoveC" and m.syntax.start
                < text.index("MoveL p1,v100")]
     assert len(circles) == 4
     assert all(m.shared is circles[1].shared is not None for m in circles[1:])
+    assert [len(m.syntax.heads) for m in circles] == [1, 2, 2, 2]
     assert [[t.name for t in m.targets] for m in circles] == [
         ["c0", "d0"], ["c1", "d1"], ["c2", "d2"], ["c3", "d3"]]
 
