@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from itertools import repeat
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.instructions import RUNTIME_FUNCTIONS
@@ -55,6 +56,13 @@ class Evaluator:
 
     def typed(self, expr: s.Expr) -> TypedValue:
         """(value, type name or None) of `expr`; raises NotConstant."""
+        kind = type(expr)
+        if kind is s.NameRef:  # the most frequent nodes first, by their exact type
+            return self.lookup(expr.name)
+        if kind is s.Number:
+            return expr.value, "num"
+        if kind is s.LazyFunctionCall:
+            return self._lazy_call(expr)
         if isinstance(expr, s.NumericAggregate):
             return expr.value, None
         if isinstance(expr, s.Number):
@@ -165,6 +173,74 @@ class Evaluator:
             raise NotConstant(f"{expr.name}: {err}") from None
 
 
+    def _lazy_call(self, expr: s.LazyFunctionCall) -> TypedValue:
+        """_call of a function call whose further arguments are a shared tail: a tail of
+        constants is evaluated once (_constant_tail), the first argument every time."""
+        head = expr.head
+        constants = None if head is None or head.value is None else _constant_tail(expr.tail)
+        if constants is None:
+            return self._call(expr)
+        key = expr.key
+        if key in RUNTIME_FUNCTIONS:
+            raise NotConstant(f"{expr.name} is read from the controller at run time")
+        handler = _FUNCTIONS.get(key)
+        if handler is None:
+            raise NotConstant(f"function {expr.name} is not evaluated before run time")
+        first = self.value(head.value)  # the first required argument, as _call takes it
+        required, optional, failure = constants
+        if failure is not None:
+            raise NotConstant(failure)
+        try:
+            return handler([first, *required], optional)
+        except (ValueShapeError, ValueError, TypeError, IndexError, KeyError,
+                ZeroDivisionError, OverflowError) as err:
+            raise NotConstant(f"{expr.name}: {err}") from None
+
+
+def _no_names(name: str) -> TypedValue:  # pragma: no cover - only constants are given
+    raise NotConstant(f"{name} is not a constant")
+
+
+_CONSTANT_NODES = (s.Number, s.NumericAggregate, s.String, s.Bool)
+# A shared argument tail (see s.LazyFunctionCall) -> (the tail, its values or None); the
+# tail is kept with its values so that its id is not reused while the entry lives.
+_TAIL_VALUES: dict[int, tuple[object, tuple | None]] = {}
+
+
+def _is_constant(expr: s.Expr | None) -> bool:
+    """A literal, a negated one, or no value (a switch): the same value in every scope."""
+    while type(expr) is s.Unary:
+        expr = expr.operand
+    return expr is None or type(expr) in _CONSTANT_NODES
+
+
+def _constant_tail(tail: s.ArgumentTail) -> tuple | None:
+    """(required values, optional values, the reason _call would refuse them or None) of
+    the arguments of a tail of literals, as _call reads them after a call's first
+    argument; None when a tail argument holds a name (then evaluated in its scope)."""
+    cached = _TAIL_VALUES.get(id(tail))
+    if cached is not None and cached[0] is tail:
+        return cached[1]
+    arguments = tail.arguments(0)
+    result: tuple | None = None
+    if all(_is_constant(a.value) for a in arguments):
+        evaluator = Evaluator(_no_names)
+        try:
+            required = [evaluator.value(a.value) for a in arguments
+                        if a.kind == "required" and a.value is not None]
+            optional = {a.key: (evaluator.value(a.value) if a.value is not None else True)
+                        for a in arguments if a.kind == "optional"}
+            if any(a.kind == "conditional" for a in arguments):
+                raise NotConstant("conditional argument is decided at run time")
+            result = (tuple(required), optional, None)
+        except NotConstant as err:
+            result = ((), {}, err.reason)
+    if len(_TAIL_VALUES) >= 4096:
+        _TAIL_VALUES.clear()
+    _TAIL_VALUES[id(tail)] = (tail, result)
+    return result
+
+
 def _num_op(op: str, a: float, b: float) -> TypedValue:
     if op == "+":
         return a + b, "num"
@@ -187,7 +263,7 @@ def _num_op(op: str, a: float, b: float) -> TypedValue:
 
 
 def _nums(args: list[Value], n: int) -> list[float]:
-    if len(args) != n or not all(map(_is_num, args)):
+    if len(args) != n or not all(map(isinstance, args, repeat(float))):
         raise ValueError(f"expected {n} numeric arguments")
     return args
 

@@ -62,11 +62,20 @@ _WORD_END = rf"(?![A-Za-z0-9_{_LATIN1_LETTERS}])"
 # number characters are taken whole (one step of the regex engine, not one per
 # character); as they hold no bracket, this never backtracks.
 _LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
+# An aggregate of such aggregates, three levels deep, each item two levels deep (an
+# array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
+_ITEM = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)+\]"
+_DEEP_AGGREGATE = rf"\[{WS}*{_ITEM}(?:{WS}*,{WS}*{_ITEM})*{WS}*\]"
+# How a three-level aggregate of the fast terminals starts (a two-level one never does).
+_DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # A value without a call, for splitting a token whose syntax has been checked already:
-# an aggregate, a negated number, a name or a number.
-_SIMPLE_TEXT = rf"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+"
-# A value: a function call of such values (`Offs(p1,0,0,-10)`) or one of them.
-VALUE_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)|{_SIMPLE_TEXT}"
+# an aggregate (up to three levels), a negated number, a name or a number.
+_SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
+                rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
+# A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
+# (`path{3}`, `grid{i,2}`) or one of them.
+VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*\)|\{{[^{{}}]*\}}))?"
+              rf"|{_SIMPLE_TEXT}")
 
 
 class NotFast(Exception):
@@ -131,11 +140,17 @@ def _patterns() -> dict[str, str]:
     following = rf"(?:,{WS}*|(?=\\))"
     inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
              rf"\)")
-    value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{inner})?)"
+    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
+    index_item = f"(?:{number}|{value_name})"
+    index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
+    value = (f"(?:{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}|(?:-{WS}*)?{number}"
+             f"|{value_name}(?:{WS}*(?:{inner}|{index}))?)")
     argument = f"(?:{value}|{optional})"
     call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    # array dimensions: numbers (`{50}`, `{2,3}`)
+    dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
-            f"{data_name}{WS}*(?::={WS}*{value}{WS}*)?;")
+            f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
     return {"call": call, "decl": decl}
 
 
@@ -182,7 +197,8 @@ CALL_PIECE = re.compile(
 
 def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
     """Splits a declaration whose syntax has been checked: (LOCAL, TASK, storage,) type,
-    name and value text; the first three groups only with `modifiers`."""
+    name, (the inside of its dimensions' braces,) and value text; the groups in
+    parentheses only with `modifiers`."""
     def group(pattern: str) -> str:
         return f"({pattern})" if modifiers else pattern
 
@@ -190,6 +206,7 @@ def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
         rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
         rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
+        rf"(?:\{{{group('[^{}]*')}\}}{WS}*)?"
         rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
 
@@ -265,23 +282,26 @@ _WS_CHARS = " \t\f\v\r\n\x1a"
 
 
 def _call_node(text: str, start: int) -> s.Call:
-    """The Call node of checked function call text `Name(args)` at `start`."""
+    """The Call node of checked function call text `Name(args)` at `start`: its first
+    argument, and the rest as a tail read once per distinct text (a LazyFunctionCall,
+    like split_calls' LazyCall: `Offs(p1,0,0,10)` and `Offs(p2,0,0,10)` share `,0,0,10)`)."""
     open_at = text.index("(")
     name = text[:open_at].rstrip(_WS_CHARS)
-    args: list[s.Argument] = []
-    for piece in _INNER_PIECE.finditer(text, open_at + 1):
-        slash, option, option_value, value, close = piece.groups()
-        if value is not None:
-            node = _value_node(value, start + piece.start(4))
-            args.append(s.Argument(node.start, node.end, "required", None, node))
-        elif slash is not None:
-            node = None if option_value is None else _value_node(option_value,
-                                                                 start + piece.start(3))
-            args.append(s.Argument(start + piece.start(1), start + piece.end(), "optional",
-                                   option, node))
-        elif close is not None:
-            break
-    return s.Call(start, start + len(text), sys.intern(name), args)
+    first = _INNER_PIECE.match(text, open_at + 1)
+    value = first.group(4)
+    if value is None:  # an optional argument first, or no argument
+        head, tail_at = None, open_at + 1
+    else:
+        node = _value_node(value, start + first.start(4))
+        head = s.Argument(node.start, node.end, "required", None, node)
+        tail_at = first.end()
+    tail_text = text[tail_at:]
+    tail = _INNER_TAILS.get(tail_text)
+    if tail is None:
+        tail = CallTail(tail_text, _INNER_PIECE)
+        _INNER_TAILS.keep(tail_text, tail)
+    return s.LazyFunctionCall(start, start + len(text), sys.intern(name), head, tail,
+                              start + tail_at)
 
 
 def _value_node(text: str, start: int) -> s.Expr:
@@ -290,6 +310,8 @@ def _value_node(text: str, start: int) -> s.Expr:
     end = start + len(text)
     first = text[0]
     if first == "[":
+        if _DEEP_START.match(text):
+            return _deep_aggregate(text, start, _RESTS)
         return s.NumericAggregate(start, end, aggregate_value(text))
     if first.isdigit() or first == ".":
         return s.Number(start, end, number_value(text), text)
@@ -299,7 +321,37 @@ def _value_node(text: str, start: int) -> s.Expr:
         return s.Unary(start, operand.end, "-", operand)
     if text[-1] == ")":
         return _call_node(text, start)
+    if text[-1] == "}":
+        return _index_node(text, start)
     return s.NameRef(start, end, sys.intern(text))
+
+
+# An index of an array element, or a dimension: a number or a name.
+_INDEX_ITEM = re.compile(r"[A-Za-z0-9_.+\-]+")
+
+
+def _index_node(text: str, start: int) -> s.Index:
+    """The Index node of checked array element text `name{i, ...}` at `start`."""
+    open_at = text.index("{")
+    name = text[:open_at].rstrip(_WS_CHARS)
+    base = s.NameRef(start, start + len(name), sys.intern(name))
+    indices = [_value_node(m.group(), start + m.start())
+               for m in _INDEX_ITEM.finditer(text, open_at + 1)]
+    return s.Index(start, start + len(text), base, indices)
+
+
+_DEEP_ITEM = re.compile(r"\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\]")
+
+
+def _deep_aggregate(text: str, start: int, rests: Memo) -> s.Aggregate:
+    """The Aggregate node of a checked three-level aggregate at `start` (an array of
+    robtargets): the grammar reads each item as a NUMERIC_AGGREGATE."""
+    items: list[s.Expr] = []
+    for m in _DEEP_ITEM.finditer(text, 1):
+        at = start + m.start()
+        items.append(s.NumericAggregate(at, start + m.end(),
+                                        shared_aggregate_value(m.group(), rests)))
+    return s.Aggregate(start, start + len(text), items)
 
 
 def _moved(node: Any, shift: int) -> Any:
@@ -310,6 +362,16 @@ def _moved(node: Any, shift: int) -> Any:
     if isinstance(node, s.Unary):
         return s.Unary(node.start + shift, node.end + shift, node.op,
                        _moved(node.operand, shift))
+    if isinstance(node, s.LazyFunctionCall):
+        return s.LazyFunctionCall(node.start + shift, node.end + shift, node.name,
+                                  None if node.head is None else _moved(node.head, shift),
+                                  node.tail, node.shift + shift)
+    if isinstance(node, s.Aggregate):
+        return s.Aggregate(node.start + shift, node.end + shift,
+                           [_moved(item, shift) for item in node.items])
+    if isinstance(node, s.Index):
+        return s.Index(node.start + shift, node.end + shift, _moved(node.base, shift),
+                       [_moved(index, shift) for index in node.indices])
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
@@ -335,20 +397,26 @@ _TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple]
 
 def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
     """(node type, start, end, other fields) of the node _value_node makes."""
-    node = _value_node(text, start)
+    return _node_entry(_value_node(text, start), start)
+
+
+def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
+    """(node type, start, end, other fields) of a value node, standing at `start`."""
+    end = start + node.end - node.start
     if isinstance(node, s.Number):
-        return s.Number, start, node.end, (node.value, node.text)
+        return s.Number, start, end, (node.value, node.text)
     if isinstance(node, s.NumericAggregate):
-        return s.NumericAggregate, start, node.end, (node.value,)
+        return s.NumericAggregate, start, end, (node.value,)
     if isinstance(node, s.NameRef):
-        return s.NameRef, start, node.end, (node.name,)
-    return _nested, start, node.end, (node,)
+        return s.NameRef, start, end, (node.name,)
+    return _nested, start, end, (node,)
 
 
-def _tail(text: str) -> tuple[_TailArgument, ...]:
-    """The arguments in checked call text that follows a call's name or first argument."""
+def _tail(text: str, pieces: re.Pattern[str]) -> tuple[_TailArgument, ...]:
+    """The arguments in checked call text that follows a call's name or first argument,
+    split by `pieces` (CALL_PIECE, or _INNER_PIECE inside a function call)."""
     entries: list[_TailArgument] = []
-    for piece in CALL_PIECE.finditer(text):
+    for piece in pieces.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
             node, at, end, fields = _value_entry(value, piece.start(4))
@@ -367,12 +435,40 @@ def _tail(text: str) -> tuple[_TailArgument, ...]:
 class CallTail:
     """The arguments after a call's name or first argument, read once per distinct
     text and made into nodes for every call that ends with that text
-    (rapidfix.rapid.syntax.LazyCall)."""
+    (rapidfix.rapid.syntax.LazyCall, LazyFunctionCall)."""
 
     __slots__ = ("entries",)
 
-    def __init__(self, text: str) -> None:
-        self.entries = _tail(text)
+    def __init__(self, text: str | None, pieces: re.Pattern[str] = CALL_PIECE) -> None:
+        self.entries = () if text is None else _tail(text, pieces)
+
+    def after_first(self) -> CallTail | None:
+        """The tail of the arguments after this tail's first, when that is a required
+        value (None otherwise): what CallTail reads from the text after it."""
+        entries = self.entries
+        if not entries or entries[0][0] != "required":
+            return None
+        cut = entries[0][2]
+        rest = CallTail(None)
+        rest.entries = tuple(
+            (kind, start - cut, end - cut, option, node, value_start - cut, value_end - cut,
+             fields)
+            for kind, start, end, option, node, value_start, value_end, fields in entries[1:])
+        return rest
+
+    def with_first(self, node: s.Expr, cut: int) -> CallTail:
+        """This tail after a required value `node` (its text `cut` characters long after
+        the start of the new tail, the separator included): what CallTail reads from
+        the text of both."""
+        start = cut - (node.end - node.start)
+        kind, at, end, fields = _node_entry(node, start)
+        both = CallTail(None)
+        both.entries = (("required", at, end, None, kind, at, end, fields), *(
+            (kind, start + cut, end + cut, option, node, value_start + cut, value_end + cut,
+             fields)
+            for kind, start, end, option, node, value_start, value_end, fields
+            in self.entries))
+        return both
 
     def arguments(self, shift: int) -> list[s.Argument]:
         """The Argument nodes of the tail standing at offset `shift`."""
@@ -383,46 +479,74 @@ class CallTail:
                 in self.entries]
 
 
-# Distinct call tails kept across tokens and files (a CAM program has a few dozen).
+# Distinct call tails kept across tokens and files (a CAM program has a few dozen),
+# of procedure calls and of function calls.
 _TAILS: Memo = Memo(TAIL_LIMIT)
+_INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
 
-    A call is its name, perhaps a first argument, and a tail of further
-    arguments. In a CAM program the first argument (the target) changes from line
-    to line but the tail (speed, zone, tool, work object) recurs, so each
-    distinct tail is read once (CallTail), and each call is a LazyCall that makes
-    the tail's nodes, shifted to where it stands, only when they are asked for.
-    Names are interned.
+    A call is its name, its leading arguments and a tail of further arguments. In
+    a CAM program the first argument (the target) changes from line to line but
+    the tail (speed, zone, tool, work object) recurs, so each distinct tail is
+    read once (CallTail), and each call is a LazyCall that makes the tail's nodes,
+    shifted to where it stands, only when they are asked for. When the text after
+    the first argument is new but the text after the second is known (MoveC's two
+    targets, or any call whose second argument varies too), the call's tail is
+    taken after its second argument. Names are interned.
     """
     calls: list[s.ProcedureCall] = []
     tails = _TAILS
     argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
-    head, find = _CALL_HEAD.match, text.index
+    head, find, piece_at = _CALL_HEAD.match, text.index, CALL_PIECE.match
     pos, size = 0, len(text)
     while pos < size:
         m = head(text, pos)
         first = m.group(2)
-        if first is None:
-            head_arg = None
-        else:
-            at = base + m.start(2)
-            if first[0].isalpha() and first[-1] != ")":
-                node: s.Expr = name_ref(at, at + len(first), intern(first))
-            else:
-                node = _value_node(first, at)
-            head_arg = argument(at, node.end, "required", None, node)
         tail_at = m.end()
         pos = find(";", tail_at) + 1
         tail_text = text[tail_at:pos]
         tail = tails.get(tail_text)
+        if first is None:
+            head_arg = second_arg = None
+        else:
+            at = base + m.start(2)
+            if first[0].isalpha() and first[-1] not in ")}":
+                node: s.Expr = name_ref(at, at + len(first), intern(first))
+            else:
+                node = _value_node(first, at)
+            head_arg, second_arg = argument(at, node.end, "required", None, node), None
+            if tail is None:
+                piece = piece_at(text, tail_at)
+                second = piece.group(4)
+                if second is not None:
+                    rest_at = piece.end()
+                    rest_text = text[rest_at:pos]
+                    rest = tails.get(rest_text)
+                    if rest is not None:  # the rest is known: two leading arguments
+                        at = base + piece.start(4)
+                        node = _value_node(second, at)
+                        second_arg = argument(at, node.end, "required", None, node)
+                        # and the tail after the first, for calls that repeat all of it
+                        tails.keep(tail_text, rest.with_first(node, rest_at - tail_at))
+                        tail, tail_at = rest, rest_at
+                    else:
+                        tail = CallTail(tail_text)
+                        tails.keep(tail_text, tail)
+                        rest = tail.after_first()
+                        if rest is not None:
+                            tails.keep(rest_text, rest)
         if tail is None:
             tail = CallTail(tail_text)
             tails.keep(tail_text, tail)
+        shift = base + tail_at
+        last = head_arg if second_arg is None else second_arg
+        if last is not None and last.end == shift:  # one int object, not two equal ones
+            shift = last.end
         calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
-                               tail, base + tail_at))
+                               tail, shift, second_arg))
     return calls
 
 
@@ -456,21 +580,34 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     rests = _RESTS
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
-        local, task, storage, type_name, name, value = m.groups()
+        local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:
             init = None
-        elif value[0] == "[":
-            at = base + spans[6][0]
+        elif value[0] == "[" and not _DEEP_START.match(value):
+            at = base + spans[7][0]
             init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
         else:
-            init = _value_node(value, base + spans[6][0])
+            init = _value_node(value, base + spans[7][0])
+        if dims is None:
+            sizes: Any = ()
+        else:
+            at = base + spans[6][0]
+            sizes = [_value_node(d.group(), at + d.start()) for d in _INDEX_ITEM.finditer(dims)]
         first = 1 if local is not None else 2 if task is not None else 3
         decls.append(data_decl(
             base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
-            name, base + spans[5][0], (), init, local is not None, task is not None,
+            # interned: the moves that name it then hold the same string
+            intern(name), base + spans[5][0], sizes, init, local is not None, task is not None,
         ))
     return decls
+
+
+def forget_texts() -> None:
+    """Empty the texts the fast path keeps across files (call tails, aggregate rests and
+    number groups): their memory back, and the next file read from a known start."""
+    for memo in (_TAILS, _INNER_TAILS, _RESTS, _GROUP_CACHE):
+        memo.clear()
 
 
 @v_args(inline=True)

@@ -73,22 +73,27 @@ _Layout = tuple[tuple[str, "str | None", dict], ...]
 
 
 class _SharedTail:
-    """The operands after the target that calls with the same tail share within a
+    """The operands after the targets that calls with the same tail share within a
     routine: their Operands are made (around each call's own argument nodes) only
     when a move's `arguments` or `optional` are asked for."""
 
-    __slots__ = ("entries", "target_key")
+    __slots__ = ("entries", "head_keys", "head_of_target", "target_of_head")
 
-    def __init__(self, target_key: str, entries: tuple[tuple[bool, str, Operand], ...]
-                 ) -> None:
-        self.target_key = target_key
+    def __init__(self, head_keys: tuple[str, ...], target_keys: tuple[str, ...],
+                 entries: tuple[tuple[bool, str, Operand], ...]) -> None:
+        self.head_keys = head_keys  # the parameter of each leading argument (a target)
+        order = [key for key in target_keys if key in head_keys]
+        self.target_of_head = tuple(order.index(key) for key in head_keys)
+        self.head_of_target = tuple(head_keys.index(key) for key in order)
         self.entries = entries  # per tail argument: (optional, key, operand of the first call)
 
     def operands(self, motion: MotionInstruction) -> tuple[dict[str, Operand],
                                                           dict[str, Operand]]:
-        arguments = {self.target_key: motion.targets[0]}
+        targets = motion.targets
+        arguments = {key: targets[i] for key, i in zip(self.head_keys, self.target_of_head)}
         optional: dict[str, Operand] = {}
-        for (is_optional, key, first), arg in zip(self.entries, motion.syntax.args[1:]):
+        for (is_optional, key, first), arg in zip(self.entries,
+                                                  motion.syntax.args[len(self.head_keys):]):
             (optional if is_optional else arguments)[key] = Operand(
                 arg, first.source, first.text, first.form, first.name, first.type_name,
                 first.value, first.static, first.reason, first.declaration)
@@ -115,9 +120,12 @@ class ModelBuilder:
         self.writes: dict[int, list[_Write]] = {}
         self.state: dict[int, bool] = {}  # False while evaluating, True when done
         self.evaluators: dict[tuple[str, str | None], Evaluator] = {}
+        self.settled = False  # True once every declaration is resolved (pass 3)
         # (module, routine, type hint) -> data name as spelt -> what an Operand of it holds
         self.name_operands: dict[tuple[str, str, str | None], dict[str, tuple]] = {}
-        self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool]] = []
+        # (module, routine, type hint) -> operand text -> _operand_fields of it
+        self.operand_texts: dict[tuple[str, str | None, str | None], dict[str, tuple]] = {}
+        self.pending: list[tuple[s.ProcedureCall, MotionSpec, str, str, bool] | None] = []
         # procedure name as spelt -> (motion spec, positions and names it writes into)
         self.call_kinds: dict[str, tuple[MotionSpec | None, set[int], set[str]]] = {}
         self.module_names_as_spelt: dict[str, str] = {}
@@ -197,8 +205,22 @@ class ModelBuilder:
         key = (module, routine)
         evaluator = self.evaluators.get(key)
         if evaluator is None:
+            known: dict[str, TypedValue | NotConstant] = {}
+
             def lookup(name: str) -> TypedValue:
-                return self._lookup(name, module, routine)
+                # once every declaration is resolved, a name's value no longer changes
+                # (before, a declaration may be in the middle of its own evaluation)
+                found = known.get(name)
+                if found is None:
+                    try:
+                        found = self._lookup(name, module, routine)
+                    except NotConstant as err:
+                        found = err
+                    if self.settled:
+                        known[name] = found
+                if type(found) is NotConstant:
+                    raise NotConstant(found.reason)
+                return found
             evaluator = self.evaluators[key] = Evaluator(lookup, self.records)
         return evaluator
 
@@ -266,6 +288,8 @@ class ModelBuilder:
 
     # ------------------------------------------------------------ pass 3
     def _resolve(self, decl: Declaration) -> None:
+        if self.settled:  # every declaration is resolved
+            return
         done = self.state.get(id(decl))
         if done:
             return
@@ -328,7 +352,7 @@ class ModelBuilder:
                       routine: str | None) -> tuple:
         """(type name, value, static, reason, declaration) of an Operand that is a data name."""
         found = self._find(expr.name.lower(), module, routine)
-        if type(found) is not Declaration or not self.state.get(id(found)):
+        if type(found) is not Declaration or not (self.settled or self.state.get(id(found))):
             value, type_name, static, reason = self._evaluate_operand(
                 expr, type_hint, module, routine)
             return type_name, value, static, reason, self._declaration_named(
@@ -355,23 +379,44 @@ class ModelBuilder:
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
         text = self.source.text[expr.start:expr.end]
+        if type(expr) is s.NumericAggregate:  # its value is read already; seldom repeated
+            return Operand(arg, self.source, text, *self._operand_fields(
+                expr, type_hint, module, routine))
+        # the same text in the same scope has the same form, value and declaration
+        # (every declaration is resolved before the motions are made): read it once
+        texts = self.operand_texts.get((module, routine, type_hint))
+        if texts is None:
+            texts = self.operand_texts[(module, routine, type_hint)] = {}
+        known = texts.get(text)
+        if known is None:
+            known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
+        return Operand(arg, self.source, text, *known)
+
+    def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,
+                        routine: str | None) -> tuple:
+        """(form, name, type name, value, static, reason, declaration) of an operand
+        expression that is not a plain data name."""
         base = expr
         if isinstance(expr, (s.Aggregate, s.NumericAggregate)):
             form = "inline"
         elif isinstance(expr, s.Call) and expr.key in ("offs", "reltool"):
             form = expr.key
-            required = [a for a in expr.args if a.kind == "required"]
-            base = required[0].value if required else None
+            head = expr.head if type(expr) is s.LazyFunctionCall else None
+            if head is not None:  # its first argument, without making the others
+                base = head.value
+            else:
+                required = [a for a in expr.args if a.kind == "required"]
+                base = required[0].value if required else None
         else:
             form = "expression"
         name_ref = base if isinstance(base, s.NameRef) else None
-        operand = Operand(arg, self.source, text, form,
-                          name=name_ref.name if name_ref else None, type_name=type_hint)
+        declaration = None
         if name_ref is not None:
-            operand.declaration = self._declaration_named(name_ref, module, routine)
-        cached = self._evaluate_operand(expr, type_hint, module, routine)
-        operand.value, operand.type_name, operand.static, operand.reason = cached
-        return operand
+            declaration = self._declaration_named(name_ref, module, routine)
+        value, type_name, static, reason = self._evaluate_operand(expr, type_hint, module,
+                                                                  routine)
+        return (form, name_ref.name if name_ref else None, type_name, value, static, reason,
+                declaration)
 
     def _declaration_named(self, name_ref: s.NameRef, module: str,
                            routine: str | None) -> Declaration | None:
@@ -435,15 +480,16 @@ class ModelBuilder:
                      arguments: dict[str, Operand], optional: dict[str, Operand]
                      ) -> _SharedTail | None:
         """What every call with this call's tail (in the same routine) shares, when its
-        first argument is its only target and the rest are data names or switches."""
-        if call.head is None or not layout or layout[0][0] not in spec.target_keys:
+        leading arguments are its only targets: the same text in the same scope gives
+        the same operands (data names, switches, `\\V:=120`, any expression)."""
+        n_heads = len(call.heads)
+        if not n_heads or len(layout) < n_heads or any(
+                layout[i][0] not in spec.target_keys for i in range(n_heads)):
             return None
         entries = []
-        index = 1
-        for arg in call.args[1:]:
-            # data names, and switches (optional arguments without a value)
-            if type(arg.value) is not s.NameRef and not (
-                    arg.value is None and arg.kind == "optional"):
+        index = n_heads
+        for arg in call.args[n_heads:]:
+            if arg.name is not None and arg.kind == "required":  # `Name:=value`: by name
                 return None
             if arg.kind == "required":
                 key = layout[index][0] if index < len(layout) else f"#{index + 1}"
@@ -453,7 +499,25 @@ class ModelBuilder:
                 entries.append((False, key, arguments[key]))
             else:
                 entries.append((True, arg.key, optional[arg.key]))
-        return _SharedTail(layout[0][0], tuple(entries))
+        return _SharedTail(tuple(layout[i][0] for i in range(n_heads)), spec.target_keys,
+                           tuple(entries))
+
+    def _head_operands(self, heads: tuple[s.Argument, ...], layout: _Layout,
+                       shared: _SharedTail, module: str, rkey: str) -> list[Operand]:
+        """The target operands of a call's leading arguments, in the order of its
+        instruction's targets (CirPoint before ToPoint)."""
+        targets = []
+        for (_, hint, cache), head in zip(layout, heads):
+            expr = head.value
+            if type(expr) is s.NameRef:
+                name = expr.name
+                cached = cache.get(name)
+                if cached is None:
+                    cached = cache[name] = self._name_operand(expr, hint, module, rkey)
+                targets.append(Operand(head, self.source, name, "name", name, *cached))
+            else:
+                targets.append(self._operand(head, hint, module, rkey))
+        return [targets[i] for i in shared.head_of_target]
 
     def _motions(self) -> list[MotionInstruction]:
         """The MotionInstructions of the calls found in pass 2, in program order.
@@ -474,7 +538,9 @@ class ModelBuilder:
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
-        for call, spec, module, routine, in_loop in self.pending:
+        pending = self.pending
+        for index, (call, spec, module, routine, in_loop) in enumerate(pending):
+            pending[index] = None  # its memory is the motion's to use
             if spec.legacy is not None:  # arc welding: Weave required (old) or optional
                 spec = spec.for_call(sum(a.kind == "required" for a in call.args))
             if spec is not last[0] or routine is not last[1] or module is not last[2]:
@@ -489,26 +555,30 @@ class ModelBuilder:
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
             if type(call) is lazy_call:
-                tail = id(call.tail)
+                head = call.head
+                # (the same tail after one leading argument or after two is shared apart)
+                tail = id(call.tail) if call.second is None else (id(call.tail), 2)
                 shared = shared_tails.get(tail, False)
                 if shared is False:  # the first call with this tail: made in full
                     arguments, optional = operands(call, layout, module, rkey)
                     shared = shared_tails[tail] = self._shared_tail(
                         call, spec, layout, arguments, optional)
                 elif shared is not None:
-                    head = call.head
-                    expr = head.value
-                    if type(expr) is name_ref:
-                        name = expr.name
-                        cached = head_cache.get(name)
-                        if cached is None:
-                            cached = head_cache[name] = self._name_operand(
+                    if call.second is None:  # the usual case: one target
+                        expr = head.value
+                        if type(expr) is name_ref:
+                            name = expr.name
+                            # a target name seldom recurs in a CAM program: not kept
+                            cached = head_cache.get(name) or self._name_operand(
                                 expr, head_hint, module, rkey)
-                        target = operand(head, source, name, "name", name, *cached)
+                            targets = [operand(head, source, name, "name", name, *cached)]
+                        else:
+                            targets = [self._operand(head, head_hint, module, rkey)]
                     else:
-                        target = self._operand(head, head_hint, module, rkey)
+                        targets = self._head_operands(call.heads, layout, shared, module,
+                                                      rkey)
                     motions.append(motion(call.name, spec, module_names[module], routine,
-                                          call, source, [target], in_loop, shared))
+                                          call, source, targets, in_loop, shared))
                     continue
                 else:
                     arguments, optional = operands(call, layout, module, rkey)
@@ -546,6 +616,8 @@ class ModelBuilder:
                 state[key] = True
             else:
                 resolve(decl)
+        self.settled = True
+        self.state = {}  # not needed any more: its memory is the motions' to use
         self.program.motions = self._motions()
         # The evaluators' lookups refer back to this builder: break that cycle so
         # that reference counting frees the builder's tables at once.

@@ -64,7 +64,7 @@ def _parts(target: Value) -> tuple[tuple, tuple, tuple, tuple]:
     """(trans, rot, confdata as whole floats, extax) of a robtarget value; raises
     ValueShapeError. A value of the right shape with whole confdata is taken as it
     is (robtargets read from a program usually are)."""
-    if fits_type("robtarget", target) and all(c.is_integer() for c in target[2]):
+    if fits_type("robtarget", target) and all(map(float.is_integer, target[2])):
         trans, rot, conf, extax = target
         return trans, rot, conf, extax
     rt = to_robtarget(target)

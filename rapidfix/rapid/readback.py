@@ -168,15 +168,18 @@ class _Reader:
     def __init__(self) -> None:
         self.program = BulkProgram()
 
-    def declarations(self, run_text: str, module: str, routine: str | None) -> None:
+    def declarations(self, run_text: str, module: str, routine: str | None) -> bool:
+        if "{" in run_text:  # arrays (or a brace in a comment): the full route reads them
+            return False
         found = _BULK_DECL.findall(run_text)
         if not found:  # pragma: no cover - a run holds at least one declaration
-            return
+            return True
         types, names, values = zip(*found)
         # the first declaration of a name wins, as in the model (setdefault, at C speed)
         scope = self.program.data.setdefault((module, routine), {})
         deque(map(scope.setdefault, map(str.lower, names),
                   zip(map(str.lower, types), values)), maxlen=0)
+        return True
 
     def declaration(self, decl: s.DataDecl, text: str, module: str, routine: str | None) -> bool:
         if decl.dims:
@@ -202,8 +205,8 @@ class _Reader:
                 if item.kind == "calls":
                     if not self.calls(item.text, module, routine):
                         return False
-                else:
-                    self.declarations(item.text, module, routine)
+                elif not self.declarations(item.text, module, routine):
+                    return False
             elif kind is s.DataDecl:
                 if not self.declaration(item, text, module, routine):
                     return False
@@ -232,7 +235,8 @@ def read_bulk(text: str) -> BulkProgram | None:
             if kind is Run:
                 if item.kind != "decls":  # pragma: no cover - calls stand only in routines
                     return None
-                reader.declarations(item.text, mkey, None)
+                if not reader.declarations(item.text, mkey, None):
+                    return None
             elif kind is s.DataDecl:
                 if not reader.declaration(item, text, mkey, None):
                     return None

@@ -84,6 +84,34 @@ class Call(Node):
         return self.name.lower()
 
 
+_FUNCTION_ARGS = Call.__dict__["args"]  # the slot, under LazyFunctionCall's property
+
+
+class LazyFunctionCall(Call):
+    """A function call `Name(args)` whose arguments after the first are a shared `tail`
+    (see LazyCall): `Offs(p1,0,0,10)`, `RelTool(p2,0,0,5 \\Rz:=90)` differ from call to
+    call mostly in their first argument. `args` is the list a Call holds, made when
+    first asked for; the evaluator reads `head` and the tail's values without it."""
+
+    __slots__ = ("head", "shift", "tail")
+
+    def __init__(self, start: int, end: int, name: str, head: Argument | None,
+                 tail: ArgumentTail, shift: int) -> None:
+        self.start, self.end, self.name = start, end, name
+        self.head, self.tail, self.shift = head, tail, shift
+
+    @property  # type: ignore[override]
+    def args(self) -> list[Argument]:
+        try:
+            return _FUNCTION_ARGS.__get__(self)
+        except AttributeError:
+            args = self.tail.arguments(self.shift)
+            if self.head is not None:
+                args.insert(0, self.head)
+            _FUNCTION_ARGS.__set__(self, args)
+            return args
+
+
 @dataclass(slots=True, eq=False)
 class Unary(Node):
     op: str  # '-', '+', 'NOT'
@@ -163,20 +191,28 @@ _CALL_ARGS = ProcedureCall.__dict__["args"]  # the slot, under the property belo
 
 
 class LazyCall(ProcedureCall):
-    """A ProcedureCall whose arguments after the first are a shared `tail`, shifted
-    to where this call stands; its `args` are made when first asked for.
+    """A ProcedureCall whose leading argument `head` (and `second`, when the second
+    changes from call to call too, as MoveC's two targets) is followed by a shared
+    `tail`, shifted to where this call stands; its `args` are made when first asked for.
 
-    A CAM program's hundred thousand moves differ only in their first argument,
-    and most readers never look past it: the nodes of the rest are made on demand.
-    `args` is the same list of nodes a ProcedureCall holds (`head` first).
+    A CAM program's hundred thousand moves differ only in their targets, and most
+    readers never look past them: the nodes of the rest are made on demand.
+    `args` is the same list of nodes a ProcedureCall holds (`heads` first).
     """
 
-    __slots__ = ("head", "shift", "tail")
+    __slots__ = ("head", "second", "shift", "tail")
 
     def __init__(self, start: int, end: int, name: str, head: Argument | None,
-                 tail: ArgumentTail, shift: int) -> None:
+                 tail: ArgumentTail, shift: int, second: Argument | None = None) -> None:
         self.start, self.end, self.name = start, end, name
-        self.head, self.tail, self.shift = head, tail, shift
+        self.head, self.second, self.tail, self.shift = head, second, tail, shift
+
+    @property
+    def heads(self) -> tuple[Argument, ...]:
+        """The leading arguments before the tail: none, `head`, or `head` and `second`."""
+        if self.head is None:
+            return ()
+        return (self.head,) if self.second is None else (self.head, self.second)
 
     @property  # type: ignore[override]
     def args(self) -> list[Argument]:
@@ -185,7 +221,7 @@ class LazyCall(ProcedureCall):
         except AttributeError:
             args = self.tail.arguments(self.shift)
             if self.head is not None:
-                args.insert(0, self.head)
+                args[0:0] = self.heads
             _CALL_ARGS.__set__(self, args)
             return args
 

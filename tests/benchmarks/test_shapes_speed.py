@@ -33,6 +33,7 @@ from lark import Lark
 
 sys.path.insert(0, str(Path(__file__).parent))
 from batch_timing import batch_timings
+from more_shapes import MORE_SHAPES, more_program
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
@@ -58,11 +59,24 @@ def _suffix(shape: str) -> str:
 
 
 def test_parse_matrix():
+    _parse_rows(ONLY, shape_program)
+
+
+def test_parse_more_shapes():
+    """The same on shapes the fast path was not tuned on (tests/benchmarks/more_shapes.py):
+    VAR/PERS targets with \\V speeds, inline targets in exponent form, MoveAbsJ, arrays of
+    robtargets, TriggL/SearchL, nested Offs(RelTool(...)), comments inside statements,
+    routines with parameters calling each other."""
+    more = [s for s in os.environ.get("RAPIDFIX_BENCH_MORE_SHAPES", "").split(",") if s]
+    _parse_rows(more or list(MORE_SHAPES), more_program)
+
+
+def _parse_rows(shapes, make):
     plain = Lark(grammar_text(), parser="lalr", lexer="contextual", cache=True)
     parse_program("MODULE M\nENDMODULE\n")
     rows = []
-    for shape in ONLY:
-        data = shape_program(shape, LINES).encode()
+    for shape in shapes:
+        data = make(shape, LINES).encode()
         lines = data.count(b"\n")
         text = decode_source(data, "x").text
         tree, base = _cpu(plain.parse, text)

@@ -26,7 +26,7 @@ from rapidfix.rapid.fastpath import (
 )
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.source import decode_source
-from rapidfix.rapid.syntax import ProcedureCall
+from rapidfix.rapid.syntax import Call, ProcedureCall
 from rapidfix.rapid.transform import numeric_aggregate_value
 
 UNUSED = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
@@ -37,8 +37,10 @@ def shape(node: object) -> object:
     """A syntax tree as nested tuples: node type, then every field."""
     if dataclasses.is_dataclass(node):
         return (
-            # a LazyCall is a ProcedureCall whose args are made when asked for
-            "ProcedureCall" if isinstance(node, ProcedureCall) else type(node).__name__,
+            # a LazyCall is a ProcedureCall (a LazyFunctionCall a Call) whose args are
+            # made when asked for
+            "ProcedureCall" if isinstance(node, ProcedureCall)
+            else "Call" if isinstance(node, Call) else type(node).__name__,
             *(shape(getattr(node, f.name)) for f in dataclasses.fields(node)),
         )
     if isinstance(node, (list, tuple)):
@@ -195,6 +197,26 @@ MIXED = {
         "  IF a <SMT>", "  TEST a", "  <CSE>", "  ENDTEST", "ENDPROC",
         "PROC p(<PAR>, \\<ALT>)", "ENDPROC", "<RDN>",
     ),
+    "calls whose second argument varies too": routine(
+        # the text after the first argument is new, after the second known: two
+        # leading arguments and a shared tail; then the same call again, one
+        "MoveL p1, v100, z1, tool0;", "MoveC c1, p2, v100, z1, tool0;",
+        "MoveC c2, p3, v100, z1, tool0;", "MoveL p4, v200, z1, tool0;",
+        "MoveL p5, v200, z1, tool0;", "MoveC Offs(c1,0,1,0), -1, v100, z1, tool0;",
+        "MoveC c1, RelTool(p2,0,0,1 \\Rz:=5), v100, z1, tool0;", "MoveC c1, p2, v100, z1, tool0;",
+        "Foo 1, [1,2], \\A, v100, z1, tool0;", "Foo 1, [1,2],v100, z1, tool0;",
+        "Foo 2, [1,2],v100, z1, tool0;",
+    ),
+    "arrays of targets and their elements": module(
+        f"CONST robtarget path{{3}}:=[{TARGET},{TARGET},\n  {TARGET}];",
+        f"VAR robtarget grid{{2,1}} := [ {TARGET} ,\n\t{TARGET} ];",
+        "CONST num n{2}:=[1,2];", "PERS num m{ 3 }:=[[1],[2],[3]];", "VAR num e{2};",
+        "CONST robtarget odd{2}:=[[[1,2]],[[3]]];", "PROC main()",
+        "  MoveL path{1},v100,z1,tool0;", "  MoveL path {n{1}}, v100, z1, tool0;",
+        "  MoveL grid{2, 1},v100,z1,tool0 \\WObj:=w;", "  MoveL path{i},v100,z1,tool0;",
+        "  Foo path{0x2}, e{1} \\A:=n{2};", "  MoveL Offs(path{1},0,0,1),v100,z1,tool0;",
+        "ENDPROC",
+    ),
     "ISO 8859-1 letters in names": module(
         f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
         "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
@@ -326,6 +348,12 @@ PIECES = [
     "Foo ;;",
     "Bar",
     "MoveL pÑ,v100,z1,tool0;",
+    "MoveC c1,p2,v100,z1,tool0;",
+    "MoveL path{1},v100,z1,tool0;",
+    "Foo grid{i, 2}, [[[1,2]],[[3]]];",
+    "Foo [[[1,2]],[3]];",
+    "MoveC Offs(c1,0,1,0), p3 ,v100,z1,tool0;",
+    "MoveC c1,-1,v100,z1,tool0 \\WObj:=w;",
     "Foo Añ, ñ \\Ø:=é;",
     "<SMT>",
     "MoveL <ARG>,v1,z1,t;",
@@ -337,6 +365,8 @@ DATA = [
     "LOCAL PERS num n:=2;",
     "CONST num m:=-1;",
     "VAR num a{2};",
+    f"CONST robtarget path{{2}}:=[{TARGET},\n {TARGET}];",
+    "VAR num b{2,3}:=[[1,2,3],[4,5,6]];",
     "CONST num q:=[1,2.3.4];",
 ]
 GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]

@@ -10,6 +10,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from more_shapes import MORE_SHAPES, more_moves
 from program_shapes import SHAPES, shape_moves
 from test_fastpath import shape
 from test_shared_operands import assert_same_model
@@ -36,3 +37,13 @@ def test_every_shape_builds_the_plain_model(name):
     program = assert_same_model(_text(name))
     assert len(program.motions) >= N_MOVES * 2 // 3
     assert all(m.target.static for m in program.motions)
+
+
+@pytest.mark.parametrize("name", MORE_SHAPES)
+def test_more_shapes_parse_to_the_plain_tree_and_model(name):
+    # layouts the fast path was not tuned on: arrays, nested calls, comments inside
+    # statements, MoveAbsJ, TriggL / SearchL, routines with parameters, ...
+    text = decode_source(more_moves(name, N_MOVES).encode(), "t").text
+    assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
+    program = assert_same_model(text)
+    assert len(program.motions) >= N_MOVES // 2

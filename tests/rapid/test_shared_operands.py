@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.fastpath import parse_text
+from rapidfix.rapid.fastpath import forget_texts, parse_text
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.model_builder import build_program
 from rapidfix.rapid.program import Operand, Program
@@ -121,6 +121,24 @@ def test_asking_for_the_arguments_makes_them_once():
     assert motion.syntax.args[0] is motion.targets[0].argument
 
 
+def test_moves_whose_second_argument_varies_share_their_tail():
+    # MoveC's two targets: the text after the first is new on every line, after the
+    # second it recurs; the moves then share what follows their two targets
+    lines = [f"CONST robtarget {n}{i}:={TARGET};" for i in range(4) for n in "cd"]
+    moves = [f"    MoveC c{i},d{i},v100,z1,gun\\WObj:=table;" for i in range(4)]
+    text = CELL.replace("  PROC main()\n", "  " + "\n  ".join(lines) + "\n  PROC main()\n"
+                        + "\n".join(moves) + "\n")
+    forget_texts()  # the first MoveC then reads its tails, the others find the second one
+    program = assert_same_model(text)
+    circles = [m for m in program.motions if m.name == "MoveC" and m.syntax.start
+               < text.index("MoveL p1,v100")]
+    assert len(circles) == 4
+    assert all(m.shared is circles[1].shared is not None for m in circles[1:])
+    assert [len(m.syntax.heads) for m in circles] == [1, 2, 2, 2]
+    assert [[t.name for t in m.targets] for m in circles] == [
+        ["c0", "d0"], ["c1", "d1"], ["c2", "d2"], ["c3", "d3"]]
+
+
 MOVES = [
     "MoveL p1,v100,z1,gun\\WObj:=table;",
     "MoveL p2,v100,z1,gun\\WObj:=table;",
@@ -133,7 +151,16 @@ MOVES = [
     "MoveL p2,v100,z1,gun\\T:=2;",
     f"MoveL {TARGET},v100,z1,gun;",
     "MoveC p1,p2,v100,z1,gun;",
+    "MoveC p2,p1,v100,z1,gun;",
+    "MoveC Offs(p1,0,1,0),p2,v100,z1,gun\\WObj:=table;",
+    "MoveC p2,RelTool(p1,0,0,1),v100,z1,gun\\WObj:=table;",
+    "MoveL p1,v200,z1,gun\\WObj:=table;",
+    "MoveL Offs(p2,0,0,-1),v200,z1,gun\\WObj:=table;",
     "MoveL p1,v100,z1,gun\\TLoad:=load0;",
+    "MoveL p1,v100\\V:=120,z10\\Z:=-5,gun;",
+    "MoveL p2,v100\\V:=120,z10\\Z:=-5,gun;",
+    "MoveL p2,v100\\V:=undeclared,z1,gun\\WObj:=[1,2];",
+    "MoveL p1,v100\\V:=undeclared,z1,gun\\WObj:=[1,2];",
     "SetDO do1, 1;",
     "gun.tframe.trans.z:=1;",
 ]
