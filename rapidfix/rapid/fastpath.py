@@ -44,6 +44,7 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
+from rapidfix.rapid.lexer_patterns import share_large_patterns
 from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
@@ -662,13 +663,13 @@ def cached_extension(grammar: str) -> str:
 def fast_parser() -> Lark:
     """The grammar's LALR parser with the fast terminals, building syntax nodes directly."""
     grammar = grammar_text()
-    return Lark(
+    return share_large_patterns(Lark(
         grammar + cached_extension(grammar),
         parser="lalr",
         lexer="contextual",
         transformer=FastSyntaxBuilder(),
         cache=True,
-    )
+    ))
 
 
 def parse_text(text: str) -> s.SourceFile:

@@ -1,0 +1,44 @@
+"""The fast terminals' patterns are compiled once for all lexer states, with the same tokens."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from lark import Lark
+
+from rapidfix.rapid.fastpath import FastSyntaxBuilder, cached_extension, fast_parser
+from rapidfix.rapid.grammar import grammar_text
+from rapidfix.rapid.lexer_patterns import LARGE_PATTERN
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+
+def _scanners(parser: Lark) -> list:
+    lexer = parser.parser.lexer
+    return [s._scanner for s in lexer.lexers.values() if s._scanner is not None]
+
+
+def test_each_large_pattern_is_one_compiled_expression_in_every_state():
+    parser = fast_parser()
+    for sample in sorted(SAMPLES.glob("*.mod")):
+        parser.parse(sample.read_text(encoding="utf-8", errors="replace"))
+    by_terminal: dict[str, set[int]] = {}
+    states = 0
+    for scanner in _scanners(parser):
+        for mre in scanner._mres:
+            if len(mre.pattern) > LARGE_PATTERN and len(mre.groupindex) == 1:
+                (name,) = mre.groupindex
+                by_terminal.setdefault(name, set()).add(id(mre))
+                states += 1
+    assert {"FAST_CALLS", "FAST_DECLS"} <= set(by_terminal)
+    assert states > len(by_terminal)  # several states accept them ...
+    assert all(len(ids) == 1 for ids in by_terminal.values())  # ... and share one each
+
+
+def test_the_same_trees_as_lark_own_scanners():
+    grammar = grammar_text()
+    own = Lark(grammar + cached_extension(grammar), parser="lalr", lexer="contextual",
+               transformer=FastSyntaxBuilder(), cache=True)
+    for sample in sorted(SAMPLES.glob("*.mod")):
+        text = sample.read_text(encoding="utf-8", errors="replace")
+        assert repr(fast_parser().parse(text)) == repr(own.parse(text)), sample.name
