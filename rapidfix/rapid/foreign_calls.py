@@ -31,19 +31,18 @@ class ForeignCall:
 
 
 def _is_target(expr: s.Expr | None, program: Program, routine: s.Routine) -> bool:
-    kind = type(expr)
-    if kind is s.Index:
+    if isinstance(expr, s.Index):
         return _is_target(expr.base, program, routine)
-    if kind is s.NameRef:
+    if isinstance(expr, s.NameRef):
         key = expr.name.lower()
         for param in routine.parameters:
             if param.name.lower() == key:
                 return param.type_name.lower() in TARGET_TYPES
         decl = program.declaration(expr.name, routine.name)
         return decl is not None and decl.type_key in TARGET_TYPES
-    if kind is s.Call:
+    if isinstance(expr, s.Call):  # LazyFunctionCall too
         return expr.name.lower() in _TARGET_FUNCTIONS
-    if kind is s.NumericAggregate:
+    if isinstance(expr, s.NumericAggregate):
         return any(fits_type(t, expr.value) for t in TARGET_TYPES)
     return False
 

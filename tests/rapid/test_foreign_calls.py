@@ -83,3 +83,15 @@ def test_motions_own_routines_and_calls_without_targets_are_not():
 ENDMODULE
 """
     assert _found(program) == []
+
+
+def test_targets_in_calls_that_share_their_text_after_the_first_argument():
+    """The fast path reads repeated call tails once (`Offs(p1,0,0,5)`, `Offs(p2,0,0,5)`:
+    a lazily made Call); such a target is a target all the same."""
+    moves = "".join(f"    Search_1D found, Offs(p{k % 2 + 1},0,0,5), p{k % 2 + 1}, v200, tool0;\n"
+                    for k in range(6))
+    program = (f"MODULE Many\n  CONST robtarget p1 := {TARGET};\n  CONST robtarget p2 := "
+               f"{TARGET};\n  VAR pose found;\n  PROC main()\n{moves}  ENDPROC\nENDMODULE\n")
+    found = _found(program)
+    assert [(line, targets) for _, line, targets in found] == [
+        (6 + k, (f"Offs(p{k % 2 + 1},0,0,5)", f"p{k % 2 + 1}")) for k in range(6)]
