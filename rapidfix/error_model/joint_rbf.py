@@ -19,19 +19,15 @@ raises ModelError naming the joint, the angle and the range.
 
 from __future__ import annotations
 
-import importlib.util
-import os
 import warnings
-from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
-from functools import lru_cache
 from types import ModuleType
 from typing import Any, ClassVar
 
 import numpy as np
 
+from rapidfix.compiled import Switch, load_kernel, numpy_only
 from rapidfix.error_model.context import Context
 from rapidfix.error_model.effect import Effect
 from rapidfix.exceptions import ModelError
@@ -50,37 +46,23 @@ _EDGE_TOL = 1e-12
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
-_COMPILED: ContextVar[bool] = ContextVar("rapidfix_rbf_compiled", default=False)
+_COMPILED = Switch("rapidfix_rbf_compiled")
 
 
-@contextmanager
-def compiled_sums() -> Iterator[None]:
+def compiled_sums() -> AbstractContextManager[None]:
     """Inside the block, networks evaluate their Gaussian sums with the compiled kernel
     when numba is installed (`rbf_compiled`: the same sums to rounding, several times
     faster). The post-processor turns it on: what it writes is rounded far above that
     level. Outside, the sums are numpy's, so a fitted or diagnosed model file is the
     same bytes with or without numba."""
-    token = _COMPILED.set(True)
-    try:
-        yield
-    finally:
-        _COMPILED.reset(token)
+    return _COMPILED.on()
 
 
-@lru_cache(maxsize=1)
 def _kernel() -> ModuleType | None:
     """The compiled Gaussian sums (`rbf_compiled`), or None: numba not installed, or
     RAPIDFIX_IK_BACKEND=numpy (the environment variable that keeps the IK in numpy
     keeps these sums there too)."""
-    if os.environ.get("RAPIDFIX_IK_BACKEND", "").strip().lower() == "numpy":
-        return None
-    if importlib.util.find_spec("numba") is None:
-        return None
-    try:
-        from rapidfix.error_model import rbf_compiled
-    except ImportError:  # e.g. a numba built for another numpy
-        return None
-    return rbf_compiled
+    return None if numpy_only() else load_kernel("rapidfix.error_model.rbf_compiled")
 
 
 class OutsideRangeWarning(UserWarning):

@@ -12,18 +12,15 @@ limits; `IKSolutions` expands every combination only when a caller asks.
 
 from __future__ import annotations
 
-import importlib.util
 import os
-from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
-from functools import lru_cache
+from contextlib import AbstractContextManager
 from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rapidfix import chunks
+from rapidfix.compiled import BACKEND_ENV, Switch, load_kernel
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.batches import as_joint_batch, as_pose_batch
 from rapidfix.kinematics.frames import flange_target
@@ -48,22 +45,14 @@ a limit must not be refused for that; 1e-7 rad is 0.1 µm at a metre."""
 RIGID_TOL = 1e-6
 """Largest deviation from an orthonormal rotation and a [0, 0, 0, 1] last row."""
 _FIXED_POINT_STEPS = 6
-BACKEND_ENV = "RAPIDFIX_IK_BACKEND"
-"""Environment variable choosing the closed-form code: auto (default), numpy or numba."""
-
-_AUTO_NUMPY: ContextVar[bool] = ContextVar("rapidfix_ik_auto_numpy", default=False)
+_AUTO_NUMPY = Switch("rapidfix_ik_auto_numpy")
 
 
-@contextmanager
-def numpy_closed_form() -> Iterator[None]:
+def numpy_closed_form() -> AbstractContextManager[None]:
     """Inside the block, "auto" solves in numpy: for work too small to pay for loading
     the compiled kernel (numba reads its cached machine code on first use, about half a
     second, more than numpy takes for ten thousand poses)."""
-    token = _AUTO_NUMPY.set(True)
-    try:
-        yield
-    finally:
-        _AUTO_NUMPY.reset(token)
+    return _AUTO_NUMPY.on()
 
 
 def turn_counts(limits: np.ndarray) -> tuple[int, ...]:
@@ -200,16 +189,9 @@ def _solve_chunk(
     out_status[...] = _statuses(rigid, ok8, out_turn_ok, out_singular)
 
 
-@lru_cache(maxsize=1)
 def _compiled() -> ModuleType | None:
     """The numba kernel module, or None when numba is not installed (or fails to import)."""
-    if importlib.util.find_spec("numba") is None:
-        return None
-    try:
-        from rapidfix.kinematics import ik_compiled
-    except ImportError:  # e.g. a numba built for another numpy
-        return None
-    return ik_compiled
+    return load_kernel("rapidfix.kinematics.ik_compiled")
 
 
 def accelerated() -> bool:

@@ -7,49 +7,31 @@ works on batches: angles of shape (N,) and axes broadcast against them.
 
 from __future__ import annotations
 
-import importlib.util
-import os
-from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
-from functools import lru_cache
+from contextlib import AbstractContextManager
 from types import ModuleType
 
 import numpy as np
 
 from rapidfix import chunks
+from rapidfix.compiled import Switch, load_kernel, numpy_only
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
-_COMPILED: ContextVar[bool] = ContextVar("rapidfix_fk_compiled", default=False)
+_COMPILED = Switch("rapidfix_fk_compiled")
 
 
-@contextmanager
-def compiled_forward() -> Iterator[None]:
+def compiled_forward() -> AbstractContextManager[None]:
     """Inside the block, `forward_pose` runs the compiled kernel (`fk_compiled`) when numba
     is installed: the same poses to rounding, several times faster. The post-processor
     turns it on (what it writes is rounded far above that level); outside, the poses are
     numpy's, so a fit or a diagnosis gives the same numbers with or without numba."""
-    token = _COMPILED.set(True)
-    try:
-        yield
-    finally:
-        _COMPILED.reset(token)
+    return _COMPILED.on()
 
 
-@lru_cache(maxsize=1)
 def _kernel() -> ModuleType | None:
     """The compiled product of exponentials, or None: numba not installed, or
     RAPIDFIX_IK_BACKEND=numpy (which keeps all the kinematics in numpy)."""
-    if os.environ.get("RAPIDFIX_IK_BACKEND", "").strip().lower() == "numpy":
-        return None
-    if importlib.util.find_spec("numba") is None:
-        return None
-    try:
-        from rapidfix.kinematics import fk_compiled
-    except ImportError:  # e.g. a numba built for another numpy
-        return None
-    return fk_compiled
+    return None if numpy_only() else load_kernel("rapidfix.kinematics.fk_compiled")
 
 
 def rotation_about(w: np.ndarray, theta: np.ndarray) -> np.ndarray:

@@ -1,0 +1,63 @@
+"""The optional compiled (numba) kernels: one loader and one kind of switch for them all.
+
+numba is an optional extra (`pip install 'rapidfix[fast]'`). Each kernel module
+(`kinematics.ik_compiled`, `kinematics.fk_compiled`, `error_model.rbf_compiled`)
+imports numba, so it is imported only when numba is installed; the environment
+variable RAPIDFIX_IK_BACKEND=numpy keeps every computation in numpy. Kernels whose
+results agree with numpy's only to rounding run inside a `Switch` that the
+post-processor turns on, so fits and diagnoses give the same bytes with or without
+numba.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from functools import cache
+from types import ModuleType
+
+BACKEND_ENV = "RAPIDFIX_IK_BACKEND"
+"""Environment variable choosing the closed-form code: auto (default), numpy or numba."""
+
+
+def numpy_only() -> bool:
+    """Whether RAPIDFIX_IK_BACKEND=numpy asks to keep everything in numpy."""
+    return os.environ.get(BACKEND_ENV, "").strip().lower() == "numpy"
+
+
+@cache
+def load_kernel(module: str) -> ModuleType | None:
+    """The kernel module `module` (dotted path), or None when numba is not installed or
+    does not import (e.g. one built for another numpy)."""
+    if importlib.util.find_spec("numba") is None:
+        return None
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        return None
+
+
+class Switch:
+    """A kernel that is off unless a block turns it on (`with switch.on():`)."""
+
+    def __init__(self, name: str) -> None:
+        self._on: ContextVar[bool] = ContextVar(name, default=False)
+
+    def get(self) -> bool:
+        """Whether the current block turned it on."""
+        return self._on.get()
+
+    @contextmanager
+    def on(self) -> Iterator[None]:
+        token = self._on.set(True)
+        try:
+            yield
+        finally:
+            self._on.reset(token)
+
+
+__all__ = ["BACKEND_ENV", "Switch", "load_kernel", "numpy_only"]
