@@ -66,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
     for outcome in summary.files:  # the table and the summary file in the command's words
         outcome.message = in_cli_words(outcome.message)
         outcome.skipped = [in_cli_words(line) for line in outcome.skipped]
+        outcome.warnings = [in_cli_words(line) for line in outcome.warnings]
     print(summary.table())
     totals = summary.to_dict()
     worst = totals["worst_predicted_mm"]

@@ -57,6 +57,9 @@ class FileOutcome:
     worst_predicted_mm: float | None = None
     skipped: list[str] = field(default_factory=list)
     message: str = ""
+    #: every warning of the rewrite (what had to be assumed, targets left to unknown
+    #: procedures, joints clamped to the model's range), not only the first
+    warnings: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -181,6 +184,7 @@ def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) 
         outcome = _process_file(source, target, rel, settings)
     messages = list(dict.fromkeys(str(w.message) for w in caught
                                   if issubclass(w.category, UserWarning)))
+    outcome.warnings.extend(m for m in messages if m not in outcome.warnings)
     if messages and outcome.status == "ok":
         outcome.status = "warnings"
     if messages and not outcome.message:
@@ -225,6 +229,7 @@ def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
             worst_predicted_mm=result.worst_predicted_mm if result.written else None,
             skipped=[str(s) for s in result.skipped],
             message=note,
+            warnings=list(result.warnings),
         )
     except RapidfixError as err:
         return FileOutcome(rel, "error", message=str(err))

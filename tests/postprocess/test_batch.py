@@ -133,3 +133,32 @@ def test_strict_batch_fails_the_file_with_skipped_targets(cell, samples, tmp_pat
     assert status["cell/runtime.MOD"] == "error" and status["cell/sub/good.mod"] == "ok"
     assert not (out / "cell" / "runtime.MOD").exists()
     assert (out / "cell" / "sub" / "good.mod").exists()
+
+
+SEARCH_AND_RUNTIME = """MODULE Seam
+  CONST robtarget p10:=[[600,0,700],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  VAR robtarget pHere;
+  VAR pose found;
+  PROC main()
+    MoveL p10, v100, fine, tool0;
+    pHere := CRobT(\\Tool:=tool0);
+    MoveL Offs(pHere, 0, 0, 50), v100, fine, tool0;
+    Search_1D found, p10, Offs(p10,0,0,20), v200, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_the_summary_keeps_every_warning_of_a_file(cell, tmp_path):
+    """A file with a skipped target and a target left to an unknown procedure: the
+    summary file lists the skipped target and the warning, in the command's words."""
+    src, out = tmp_path / "in", tmp_path / "out"
+    src.mkdir()
+    (src / "seam.mod").write_text(SEARCH_AND_RUNTIME)
+    assert main(["batch", str(src), str(out), "--model", str(cell["model_path"]), "-j", "1",
+                 "--no-progress"]) == 3
+    (entry,) = json.loads((out / "rapidfix-batch.json").read_text())["results"]
+    assert entry["status"] == "warnings" and entry["moves_skipped"] == 1
+    assert any("CRobT" in line or "pHere" in line for line in entry["skipped"])
+    assert any(w.startswith("seam.mod:9:5: Search_1D is not a motion instruction")
+               for w in entry["warnings"]), entry["warnings"]
