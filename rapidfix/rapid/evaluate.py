@@ -19,6 +19,7 @@ from rapidfix.rapid.values import RECORD_FIELDS, Value, ValueShapeError
 
 TypedValue = tuple[Value, "str | None"]
 Lookup = Callable[[str], TypedValue]
+Function = Callable[[list[Value], dict], TypedValue]
 
 
 class NotConstant(Exception):
@@ -154,24 +155,14 @@ class Evaluator:
 
     # ------------------------------------------------------------ functions
     def _call(self, expr: s.Call) -> TypedValue:
-        key = expr.key
-        if key in RUNTIME_FUNCTIONS:
-            raise NotConstant(f"{expr.name} is read from the controller at run time")
-        handler = _FUNCTIONS.get(key)
-        if handler is None:
-            raise NotConstant(f"function {expr.name} is not evaluated before run time")
+        handler = _handler(expr)
         required = [self.value(a.value) for a in expr.args
                     if a.kind == "required" and a.value is not None]
         optional = {a.key: (self.value(a.value) if a.value is not None else True)
                     for a in expr.args if a.kind == "optional"}
         if any(a.kind == "conditional" for a in expr.args):
             raise NotConstant("conditional argument is decided at run time")
-        try:
-            return handler(required, optional)
-        except (ValueShapeError, ValueError, TypeError, IndexError, KeyError,
-                ZeroDivisionError, OverflowError) as err:
-            raise NotConstant(f"{expr.name}: {err}") from None
-
+        return _apply(expr, handler, required, optional)
 
     def _lazy_call(self, expr: s.LazyFunctionCall) -> TypedValue:
         """_call of a function call whose further arguments are a shared tail: a tail of
@@ -180,21 +171,33 @@ class Evaluator:
         constants = None if head is None or head.value is None else _constant_tail(expr.tail)
         if constants is None:
             return self._call(expr)
-        key = expr.key
-        if key in RUNTIME_FUNCTIONS:
-            raise NotConstant(f"{expr.name} is read from the controller at run time")
-        handler = _FUNCTIONS.get(key)
-        if handler is None:
-            raise NotConstant(f"function {expr.name} is not evaluated before run time")
+        handler = _handler(expr)
         first = self.value(head.value)  # the first required argument, as _call takes it
         required, optional, failure = constants
         if failure is not None:
             raise NotConstant(failure)
-        try:
-            return handler([first, *required], optional)
-        except (ValueShapeError, ValueError, TypeError, IndexError, KeyError,
-                ZeroDivisionError, OverflowError) as err:
-            raise NotConstant(f"{expr.name}: {err}") from None
+        return _apply(expr, handler, [first, *required], optional)
+
+
+def _handler(expr: s.Call) -> Function:
+    """The evaluator of a function call, or NotConstant when it is known only at run time."""
+    key = expr.key
+    if key in RUNTIME_FUNCTIONS:
+        raise NotConstant(f"{expr.name} is read from the controller at run time")
+    handler = _FUNCTIONS.get(key)
+    if handler is None:
+        raise NotConstant(f"function {expr.name} is not evaluated before run time")
+    return handler
+
+
+def _apply(expr: s.Call, handler: Function, required: list[Value], optional: dict
+           ) -> TypedValue:
+    """`handler`'s value of the arguments; a value it refuses makes the call not constant."""
+    try:
+        return handler(required, optional)
+    except (ValueShapeError, ValueError, TypeError, IndexError, KeyError,
+            ZeroDivisionError, OverflowError) as err:
+        raise NotConstant(f"{expr.name}: {err}") from None
 
 
 def _no_names(name: str) -> TypedValue:  # pragma: no cover - only constants are given
@@ -302,7 +305,7 @@ def _rounding(fn: Callable[[float], float]) -> Callable[[list[Value], dict], Typ
     return handler
 
 
-_FUNCTIONS: dict[str, Callable[[list[Value], dict], TypedValue]] = {
+_FUNCTIONS: dict[str, Function] = {
     "offs": _offs,
     "reltool": _reltool,
     "orientzyx": _orient_zyx,
