@@ -134,22 +134,20 @@ class ErrorModel:
     # -- forward model ------------------------------------------------------------
     def delta(self, q_cmd: np.ndarray, ctx: Context | None = None) -> np.ndarray:
         """Σ joint errors (N, 6) rad at commanded joints (N, 6) rad."""
-        q = _joints(q_cmd)
-        ctx = EMPTY if ctx is None else ctx
-        out = np.zeros_like(q)
-        for eff in self.effects:
-            if eff.adds_joint_delta:
-                out += eff.joint_delta(q, ctx)
-        return out
+        return self._joint_sum("joint_delta", q_cmd, ctx)
 
     def delta_derivative(self, q_cmd: np.ndarray, ctx: Context | None = None) -> np.ndarray:
         """Σ ∂Δθ_j/∂θ_j (N, 6) of the joint-error effects (exact for separable ones)."""
+        return self._joint_sum("joint_delta_derivative", q_cmd, ctx)
+
+    def _joint_sum(self, term: str, q_cmd: np.ndarray, ctx: Context | None) -> np.ndarray:
+        """Σ over the joint-error effects of their method `term`(q, ctx), (N, 6)."""
         q = _joints(q_cmd)
         ctx = EMPTY if ctx is None else ctx
         out = np.zeros_like(q)
         for eff in self.effects:
             if eff.adds_joint_delta:
-                out += eff.joint_delta_derivative(q, ctx)
+                out += getattr(eff, term)(q, ctx)
         return out
 
     def geometry(self, robot: RobotModel, q_cmd: np.ndarray,
