@@ -85,6 +85,10 @@ class NameAllocator:
         self._taken = {name.lower() for name in taken}
         self._texts = [text.lower() for text in texts]
         self._heads: set[str] = set()
+        #: truncated base -> the suffix counter of the name last handed out for it: the
+        #: free counters of a base only grow (names are never released), so the next
+        #: search starts there (many long stems truncated alike stay linear)
+        self._counter: dict[str, int] = {}
 
     def _scan(self, head: str) -> None:
         """Take every word of the texts that begins with `head` (lower case): a superset
@@ -141,11 +145,17 @@ class NameAllocator:
         candidate = base[:MAX_IDENTIFIER]
         key = candidate.lower()
         taken = self._taken
-        counter = 1
+        memo = key  # every candidate of `base` is made from these characters
+        counter = self._counter.get(memo, 1)
+        if counter > 1:
+            suffix = f"_{counter}"
+            candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
+            key = candidate.lower()
         while key in taken:
             counter += 1
             suffix = f"_{counter}"
             candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
             key = candidate.lower()
         taken.add(key)
+        self._counter[memo] = counter
         return candidate

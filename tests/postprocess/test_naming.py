@@ -72,6 +72,44 @@ def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, ste
     assert many.allocate("p1", prefix) == one.allocate("p1", prefix)
 
 
+def _first_free(taken: set[str], base: str) -> str:
+    """The definition: `base` cut to 32 characters, else the smallest suffix _2, _3, …
+    whose name is free (case-insensitive)."""
+    candidate, counter = base[:MAX_IDENTIFIER], 1
+    while candidate.lower() in taken:
+        counter += 1
+        candidate = base[: MAX_IDENTIFIER - len(f"_{counter}")] + f"_{counter}"
+    return candidate
+
+
+@settings(max_examples=200, deadline=None)
+@given(steps=st.lists(st.tuples(st.booleans(), st.sampled_from(
+    ["p1", "P1", "p1_2", "w" * 29, "w" * 29 + "x", "W" * 40, "w" * 40 + "y",
+     "w" * 27 + "_2", "w" * 28 + "_10"])), max_size=40))
+def test_each_name_is_the_first_free_one_whatever_was_reserved_between(steps):
+    """Many stems that cut to the same 32 characters (long robtarget names) each get
+    the smallest free suffix, as the definition says, with names reserved in between."""
+    names, taken = NameAllocator(), set()
+    for reserve, stem in steps:
+        if reserve:
+            names.reserve("jt_" + stem)
+            taken.add(("jt_" + stem).lower())
+        else:
+            expected = _first_free(taken, "jt_" + stem)
+            assert names.allocate(stem) == expected
+            taken.add(expected.lower())
+
+
+def test_a_thousand_long_names_cut_alike_are_distinct_and_numbered_in_order():
+    names = NameAllocator()
+    got = [names.allocate("pWeldSeamStartApproachPositionOfTheLeftBracket" + str(k))
+           for k in range(1000)]
+    assert len({g.lower() for g in got}) == 1000
+    assert got[0] == ("jt_pWeldSeamStartApproachPositionOfTheLeftBracket")[:MAX_IDENTIFIER]
+    assert got[1:] == [_first_free({g.lower() for g in got[:k]}, "jt_pWeldSeamStartApproach"
+                                   "PositionOfTheLeftBracket" + str(k)) for k in range(1, 1000)]
+
+
 def test_counting_a_few_names_agrees_with_counting_every_word():
     """`count_identifiers` searches for the names it is asked about; on random texts of
     letters, digits, underscores and separators it gives the counts of the full

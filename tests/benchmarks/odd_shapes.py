@@ -1,0 +1,163 @@
+"""Program shapes neither program_shapes.py nor more_shapes.py writes, for checking that
+speed holds (and grows linearly) on layouts the fast paths were not tuned on:
+
+- many_procs:  a routine every three moves, each with its own VAR and a call chain
+- frames:      a hundred tools, work objects and loads, moves cycling through them
+- stacked:     several statements on one line, one-line IF around moves
+- deep:        IF / ELSEIF / ELSE, TEST / CASE and WHILE nested five deep
+- expressions: targets and offsets written with named num constants and arithmetic
+- modules:     a .prg of many small modules
+- wide:        long comment lines with non-ASCII text, long identifiers, `\\Conc`, `\\ID`
+
+`odd_program(shape, lines)` gives about `lines` lines of that shape.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from program_shapes import _head, _robtarget, _targets
+
+ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide")
+
+
+def _decls(n: int, prefix: str = "p") -> list[str]:
+    trans, confs = _targets(n)
+    return [f"  CONST robtarget {prefix}{i}:={_robtarget(trans[i], confs[i])};"
+            for i in range(n)]
+
+
+def _many_procs(n: int) -> list[str]:
+    out = [*_head("ManyProcs"), *_decls(n)]
+    procs = (n + 2) // 3
+    for r in range(procs):
+        out += [f"  PROC R{r}()", "    VAR num k:=0;"]
+        for k in range(3 * r, min(n, 3 * r + 3)):
+            out.append(f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;")
+        out += ["    k:=k + 1;", *([f"    R{r + 1};"] if r + 1 < procs else []), "  ENDPROC"]
+    return [*out, "  PROC main()", "    R0;", "  ENDPROC", "ENDMODULE"]
+
+
+def _frames(n: int) -> list[str]:
+    out = [*_head("Frames")]
+    count = 100
+    for i in range(count):
+        out.append(f"  PERS tooldata tool{i}:=[TRUE,[[{i % 7},{i % 5},{100 + i}],[1,0,0,0]],"
+                   f"[{1 + i % 4},[0,0,{40 + i}],[1,0,0,0],0,0,0]];")
+        out.append(f'  PERS wobjdata wobj{i}:=[FALSE,TRUE,"",[[{850 + i % 3},{80 + i % 5},450],'
+                   "[0.923879533,0.0,-0.382683432,0.0]],[[0,0,0],[1,0,0,0]]];")
+        out.append(f"  PERS loaddata load{i}:=[{0.5 + i % 6},[0,0,{10 + i}],[1,0,0,0],0,0,0];")
+    out += _decls(n)
+    moves = []
+    for k in range(n):
+        if k % 10 == 0:
+            moves.append(f"    GripLoad load{(k // 10) % count};")
+        moves.append(f"    MoveL p{k},v100,z1,tool{k % count}\\WObj:=wobj{(k * 7) % count};")
+    for first in range(0, len(moves), 400):
+        out += [f"  PROC Part{first // 400}()", *moves[first:first + 400], "  ENDPROC"]
+    return [*out, "ENDMODULE"]
+
+
+def _stacked(n: int) -> list[str]:
+    out = [*_head("Stacked"), "  PERS bool bOn:=TRUE;", *_decls(n), "  PROC main()"]
+    for k in range(0, n, 3):
+        group = [f"MoveL p{j}, v100, z1, tMill\\WObj:=wPlate;" for j in range(k, min(n, k + 3))]
+        if k % 2:
+            out.append("    IF bOn THEN " + " ".join(group) + " ENDIF")
+        else:
+            out.append("    " + " ".join(group))
+    return [*out, "  ENDPROC", "ENDMODULE"]
+
+
+def _deep(n: int) -> list[str]:
+    out = [*_head("Deep"), "  VAR num nMode:=1;", "  VAR num i:=0;", *_decls(n)]
+    blocks = []
+    for k in range(0, n, 5):
+        moves = [f"MoveL p{j},v100,z1,tMill\\WObj:=wPlate;" for j in range(k, min(n, k + 5))]
+        blocks.append(["    IF nMode > 0 THEN", "      TEST nMode", "      CASE 1, 2:",
+                       "        WHILE i < 1 DO", "          IF i = 0 THEN",
+                       *(f"            {m}" for m in moves[:3]),
+                       "          ELSEIF i = 2 THEN", "            i:=3;", "          ELSE",
+                       *(f"            {m}" for m in moves[3:]),
+                       "          ENDIF", "          i:=i + 1;", "        ENDWHILE",
+                       "      DEFAULT:", "        nMode:=1;", "      ENDTEST", "    ENDIF",
+                       "    i:=0;"])
+    for first in range(0, len(blocks), 50):
+        out += [f"  PROC Job{first // 50}()",
+                *(line for block in blocks[first:first + 50] for line in block), "  ENDPROC"]
+    return [*out, "ENDMODULE"]
+
+
+def _expressions(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    out = [*_head("Expressions"), "  CONST num nStep:=0.5;", "  CONST num nLift:=2*nStep;",
+           "  CONST num nHalf:=nStep/2;"]
+    for i in range(n):
+        x, y, z = (float(v) for v in trans[i].strip("[]").split(","))
+        out.append(f"  CONST robtarget p{i}:=[[{x + 1:.3f}-1,{y:.3f}+0*nStep,{z:.3f}],"
+                   f"{_robtarget('[0,0,0]', confs[i])[9:]};")
+    moves = []
+    for k in range(n):
+        if k % 2:
+            moves.append(f"    MoveL Offs(p{k},nStep-nHalf*2,0,-nLift+2*nStep),v100,z1,"
+                         "tMill\\WObj:=wPlate;")
+        else:
+            moves.append(f"    MoveL p{k},[100+nStep*2,500,5000,1000],z1,tMill\\WObj:=wPlate;")
+    for first in range(0, n, 500):
+        out += [f"  PROC Part{first // 500}()", *moves[first:first + 500], "  ENDPROC"]
+    return [*out, "ENDMODULE"]
+
+
+def _modules(n: int) -> list[str]:
+    out = ["%%%", "  VERSION:1", "  LANGUAGE:ENGLISH", "%%%", ""]
+    trans, confs = _targets(n)
+    per = 20
+    for m, first in enumerate(range(0, n, per)):
+        ks = range(first, min(n, first + per))
+        out += [*_head(f"Mod{m}"),
+                *(f"  LOCAL CONST robtarget q{k}:={_robtarget(trans[k], confs[k])};" for k in ks),
+                f"  PROC Run{m}()",
+                *(f"    MoveL q{k},v100,z1,tMill\\WObj:=wPlate;" for k in ks),
+                "  ENDPROC", "ENDMODULE", ""]
+    return out[:-1]
+
+
+def _wide(n: int) -> list[str]:
+    name = "pWeldSeamStartApproachPositionOfTheLeftHandBracket"
+    out = [*_head("Wide"), "  VAR syncident sync1;", *_decls(n, name)]
+    moves = []
+    for k in range(n):
+        if k % 3 == 0:
+            moves.append(f"    ! Schweißnaht Nr. {k} — Übergang zur nächsten Spur, Ø 12 mm, "
+                         "Düse 45°, " + "Ausrichtung prüfen " * 20)
+        if k % 4 == 0:
+            moves.append(f"    MoveL {name}{k},v100\\V:=1200,z1\\Z:=5,tMill\\WObj:=wPlate;")
+        elif k % 4 == 1:
+            moves.append(f"    MoveJ\\Conc,{name}{k},v200,z10,tMill\\WObj:=wPlate;")
+        elif k % 4 == 2:
+            moves.append(f"    MoveL\\Conc,{name}{k},v100,fine\\Inpos:=inpos50,tMill"
+                         "\\WObj:=wPlate;")
+        else:
+            moves.append(f"    MoveL {name}{k},v100,z1,tMill\\WObj:=wPlate;")
+    for first in range(0, len(moves), 500):
+        out += [f"  PROC Part{first // 500}()", *moves[first:first + 500], "  ENDPROC"]
+    return [*out, "ENDMODULE"]
+
+
+_BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
+             "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide}
+
+
+def odd_moves(shape: str, n_moves: int) -> str:
+    """The program text of `shape` with about n_moves moves."""
+    return "\n".join(_BUILDERS[shape](n_moves)) + "\n"
+
+
+@functools.lru_cache(maxsize=16)
+def _lines_per_move(shape: str) -> float:
+    return odd_moves(shape, 1000).count("\n") / 1000
+
+
+def odd_program(shape: str, lines: int) -> str:
+    """The program text of `shape` with about `lines` lines."""
+    return odd_moves(shape, max(3, round(lines / _lines_per_move(shape))))

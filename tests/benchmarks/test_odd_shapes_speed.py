@@ -1,0 +1,45 @@
+"""Benchmark: `rapidfix rewrite` on program shapes no other benchmark writes (issue 18).
+
+Run (RAPIDFIX_BENCH_ODD_LINES, default 20,000, is the larger size; the smaller is a
+quarter of it):
+
+    OMP_NUM_THREADS=1 pytest tests/benchmarks/test_odd_shapes_speed.py -n 0 -s
+
+For each shape of tests/benchmarks/odd_shapes.py, `rapidfix rewrite` as a fresh
+process at two sizes: lines per second of the child's CPU time and how much the cost
+per line grows from the smaller to the larger program (1.0: linear; a quadratic step
+shows as about 4). Only correctness is asserted, never time.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from odd_shapes import ODD_SHAPES, odd_program
+from test_shapes_speed import _run_cli, model_path  # noqa: F401  (model_path: a fixture)
+
+LINES = int(os.environ.get("RAPIDFIX_BENCH_ODD_LINES", "20000"))
+
+
+def test_rewrite_odd_shapes(model_path, tmp_path):  # noqa: F811
+    rows = []
+    for shape in ODD_SHAPES:
+        suffix = ".prg" if shape == "modules" else ".mod"
+        per_line = []
+        for lines in (LINES // 4, LINES):
+            source = tmp_path / f"{shape}_{lines}{suffix}"
+            source.write_text(odd_program(shape, lines), encoding="utf-8", newline="")
+            count = source.read_bytes().count(b"\n")
+            cpu, _, done = _run_cli("rewrite", str(source), "--model", str(model_path),
+                                    "-o", str(tmp_path / f"out{suffix}"), "--force")
+            assert done.returncode in (0, 3), done.stderr
+            per_line.append((count, cpu / count))
+        (_, small), (count, large) = per_line
+        rows.append((shape, count, 1.0 / large, large / small))
+    print(f"\nrapidfix rewrite, whole process, odd shapes ({LINES:,} and {LINES // 4:,} lines)")
+    print(f"{'shape':12s} {'lines':>8s} {'lines/s CPU':>12s} {'cost/line growth':>17s}")
+    for shape, count, rate, growth in rows:
+        print(f"{shape:12s} {count:8,d} {rate:12,.0f} {growth:16.2f}x")
