@@ -48,19 +48,20 @@ class CheckUnits:
     def statement_count(self) -> int:
         return self._count
 
-    def _routines(self) -> dict[str, list[str]]:
-        by_module: dict[str, list[str]] = {}
+    def _routines(self) -> dict[str, dict[str, None]]:
+        """Module -> its routines (an ordered set: a program may have thousands)."""
+        by_module: dict[str, dict[str, None]] = {}
         for module, routine in [*self._decls, *self._statements]:
-            routines = by_module.setdefault(module, [])
-            if routine is not None and routine not in routines:
-                routines.append(routine)
+            routines = by_module.setdefault(module, {})
+            if routine is not None:
+                routines[routine] = None
         return by_module
 
     def text(self) -> tuple[str, list[int]]:
         """The check program and the statement ids in the order they appear in it."""
         out: list[str] = []
         order: list[int] = []
-        modules = self._routines() or {"RapidfixCheck": []}  # the comments alone
+        modules = self._routines() or {"RapidfixCheck": {}}  # the comments alone
         for n, (module, routines) in enumerate(modules.items()):
             out.append(f"MODULE {module}")
             if n == 0:
