@@ -11,6 +11,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
 from more_shapes import MORE_SHAPES, more_moves
+from odd_shapes import ODD_SHAPES, odd_moves
 from program_shapes import SHAPES, shape_moves
 from test_fastpath import shape
 from test_shared_operands import assert_same_model
@@ -44,6 +45,17 @@ def test_more_shapes_parse_to_the_plain_tree_and_model(name):
     # layouts the fast path was not tuned on: arrays, nested calls, comments inside
     # statements, MoveAbsJ, TriggL / SearchL, routines with parameters, ...
     text = decode_source(more_moves(name, N_MOVES).encode(), "t").text
+    assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
+    program = assert_same_model(text)
+    assert len(program.motions) >= N_MOVES // 2
+
+
+@pytest.mark.parametrize("name", ODD_SHAPES)
+def test_odd_shapes_parse_to_the_plain_tree_and_model(name):
+    # shapes no benchmark of the fast path uses: a routine every three moves, a hundred
+    # tools, several statements on a line, nested IF/TEST/WHILE, arithmetic in targets,
+    # many small modules, long non-ASCII comments and long names
+    text = decode_source(odd_moves(name, N_MOVES).encode(), "t").text
     assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
     program = assert_same_model(text)
     assert len(program.motions) >= N_MOVES // 2
