@@ -86,7 +86,12 @@ def conf_matches(
 ) -> np.ndarray:
     """(...,) mask: joints q (..., 6) have confdata `conf` (..., 4); values within `tol`
     (rad) or `tol_mm` of a boundary match both sides."""
-    k = conf_quantities(model, q)
+    return _quantities_match(conf_quantities(model, q), conf, tol, tol_mm)
+
+
+def _quantities_match(k: np.ndarray, conf: np.ndarray, tol: float, tol_mm: float) -> np.ndarray:
+    """`conf_matches` on the quantities `conf_quantities` gave (so that one evaluation of
+    the geometry serves several tolerances)."""
     conf = np.asarray(conf)
     with np.errstate(invalid="ignore"):
         ok = np.ones(k.shape[:-1], dtype=bool)
@@ -138,10 +143,11 @@ def select_by_conf(
     candidate = np.all(first >= 0, axis=2)
     rows, branches = np.nonzero(candidate)
     q_cand = sols.base_q[rows, branches] + 2.0 * np.pi * first[rows, branches]
+    k = conf_quantities(model, q_cand)  # once, for the rounded and the exact test
     match = np.zeros((n, 8), dtype=bool)
-    match[rows, branches] = conf_matches(model, q_cand, conf[rows])
+    match[rows, branches] = _quantities_match(k, conf[rows], CONF_TOL, CONF_TOL_MM)
     found = match.any(axis=1)
-    chosen = _prefer_exact(match, rows, branches, model, q_cand, conf[rows])
+    chosen = _prefer_exact(match, rows, branches, k, conf[rows])
     q = np.full((n, 6), np.nan)
     q[found] = sols.base_q[found, chosen[found]] + 2.0 * np.pi * first[found, chosen[found]]
     status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
@@ -163,11 +169,12 @@ EXACT_TOL = 1e-9
 
 
 def _prefer_exact(match: np.ndarray, rows: np.ndarray, branches: np.ndarray,
-                  model: RobotModel, q_cand: np.ndarray, conf: np.ndarray) -> np.ndarray:
+                  quantities: np.ndarray, conf: np.ndarray) -> np.ndarray:
     """Per pose the first matching slot, one that matches exactly (not only within the
-    rounding tolerance of a boundary) if there is one."""
+    rounding tolerance of a boundary) if there is one; `quantities` are the candidates'
+    `conf_quantities`."""
     exact = np.zeros_like(match)
-    exact[rows, branches] = conf_matches(model, q_cand, conf, EXACT_TOL, EXACT_TOL)
+    exact[rows, branches] = _quantities_match(quantities, conf, EXACT_TOL, EXACT_TOL)
     exact &= match
     return np.where(exact.any(axis=1), np.argmax(exact, axis=1), np.argmax(match, axis=1))
 

@@ -18,7 +18,6 @@ import numpy as np
 
 from rapidfix.error_model import Context, ErrorModel
 from rapidfix.kinematics import RobotModel
-from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.conditions import arrival_directions
 from rapidfix.postprocess.path import (
     Curves,
@@ -149,7 +148,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
                            dtype=np.int64, count=n)
     moves = np.array(sorted(i for i, m in mode.items()
                             if m == "joint" and sites[i].kind in "LC"), dtype=np.int64)
-    previous = np.asarray(predecessors(program), dtype=np.int64)[site_motion[moves]]
+    previous = planned.conditions.predecessors()[site_motion[moves]]
     after = site_of_motion[previous]  # the site of the motion before, or -1
     # a move after another compensated site starts where that one ends; one after an
     # instruction that is not a site (a MoveAbsJ) may start at its joints

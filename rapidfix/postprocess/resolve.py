@@ -254,16 +254,23 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
 
     One cheap pass over the instructions: what depends only on an instruction's
     name, or only on its tool / work object / load operands, is worked out once
-    per distinct name or operand set, and the numbers become arrays in one go.
+    per distinct name or operand set, and the numbers become arrays in one go. A
+    site of one target written in the program (the usual move) costs a few attribute
+    reads here; its orientation is checked with all the others on the arrays.
     """
     sites: list[Site] = []
     values: list[tuple] = []
     operands: list[Operand] = []
-    blocks: list[tuple[int, int, int]] = []  # per compensated site: (site, rows, frame set)
+    # per compensated site: its index, row count and frame set
+    owners: list[int] = []
+    counts: list[int] = []
+    which: list[int] = []
     frames = _FrameCache(outside)
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
     by_tail: dict[Any, tuple[str | None, tuple]] = {}
+    joint = emit == "jointtargets"
+    deferred = False  # rows whose quaternion is checked on the arrays
     for index, motion in enumerate(program.motions):
         info = kinds.get(motion.name)
         if info is None:
@@ -282,20 +289,32 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
             if shared is not None:
                 by_tail[shared] = around
         option_reason, key = around
-        if reason is None and emit == "jointtargets":
+        if reason is None and joint:
             reason = option_reason
         site = Site(motion, kind, site_ops, reason=reason, index=index)
         sites.append(site)
         if reason is not None:
             continue
+        known = frame_sets.get(key)
+        if known is None:
+            known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
+        used, set_index = known
+        if len(site_ops) == 1 and not isinstance(used, str):
+            operand = site_ops[0]
+            if operand.static and operand.value is not None \
+                    and operand.type_name == "robtarget":
+                site.rows = [len(values)]
+                values.append(operand.value)  # the raw tuple, shape-checked by the RAPID layer
+                operands.append(operand)
+                owners.append(len(sites) - 1)
+                counts.append(1)
+                which.append(set_index)
+                deferred = True
+                continue
         found = _site_values(site_ops, outside)
         if isinstance(found, str):
             site.reason = found
             continue
-        known = frame_sets.get(key)
-        if known is None:
-            known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
-        used, index = known
         if isinstance(used, str):
             site.reason = used
             continue
@@ -303,14 +322,75 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         site.rows = [first] if len(found) == 1 else list(range(first, first + len(found)))
         values.extend(found)
         operands.extend(site_ops)
-        blocks.append((len(sites) - 1, len(found), index))
+        owners.append(len(sites) - 1)
+        counts.append(len(found))
+        which.append(set_index)
     sets = [used for used, _ in frame_sets.values()]  # by index: insertion order
-    return sites, _arrays(values, operands, blocks, sets)
+    blocks = (owners, counts, which)
+    flat = _flat_values(values)
+    if deferred and flat is not None:
+        zero = _zero_quaternions(flat)
+        if zero.any():
+            values, operands, blocks, flat = _drop_rows(sites, values, operands, blocks, zero)
+    return sites, _arrays(values, operands, blocks, sets, flat)
 
 
-def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int, int, int]],
-            sets: list[_Frames | str]) -> Targets:
-    """The rows as arrays: raw robtarget values, and per block of rows its frame set."""
+#: numbers of a robtarget value: position 3, quaternion 4, confdata 4, external axes 6
+_WIDTHS = (3, 4, 4, 6)
+_ROW = sum(_WIDTHS)
+
+
+def _flat_values(values: list[tuple]) -> np.ndarray | None:
+    """The raw robtarget values (shape-checked by the RAPID layer) as one (N, 17) array
+    in one pass, or None when their numbers do not add up (then `_arrays` takes them
+    column by column and fails)."""
+    numbers = chain.from_iterable(chain.from_iterable(values))
+    try:
+        flat = np.fromiter(numbers, dtype=float, count=_ROW * len(values))
+    except ValueError:  # fewer numbers
+        return None
+    if next(numbers, None) is not None:  # more numbers
+        return None
+    return flat.reshape(len(values), _ROW)
+
+
+def _zero_quaternions(flat: np.ndarray) -> np.ndarray:
+    """(N,) rows whose orientation quaternion is zero (the test `_site_values` makes)."""
+    q = flat[:, 3:7]
+    return q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3] < 1e-12
+
+
+def _drop_rows(sites: list[Site], values: list[tuple], operands: list[Operand],
+               blocks: tuple[list[int], list[int], list[int]], zero: np.ndarray
+               ) -> tuple[list[tuple], list[Operand], tuple[list[int], list[int], list[int]],
+                          np.ndarray]:
+    """Leave out the sites of one target whose quaternion is zero (rare): they get that
+    reason, and the rows after them move up."""
+    owners, counts, which = blocks
+    keep = ~zero
+    new_row = np.cumsum(keep) - 1
+    kept_blocks: tuple[list[int], list[int], list[int]] = ([], [], [])
+    for owner, count, frame_set in zip(owners, counts, which):
+        site = sites[owner]
+        if zero[site.rows[0]]:  # only one-target sites are checked on the arrays
+            site.reason = operand_label(site.targets, site.targets[0]) \
+                + "orientation quaternion is zero"
+            site.rows = []
+            continue
+        site.rows = [int(new_row[r]) for r in site.rows]
+        for part, item in zip(kept_blocks, (owner, count, frame_set)):
+            part.append(item)
+    rows = np.flatnonzero(keep).tolist()
+    values = [values[r] for r in rows]
+    operands = [operands[r] for r in rows]
+    return values, operands, kept_blocks, _flat_values(values)
+
+
+def _arrays(values: list[tuple], operands: list[Operand],
+            blocks: tuple[list[int], list[int], list[int]], sets: list[_Frames | str],
+            flat: np.ndarray | None = None) -> Targets:
+    """The rows as arrays: raw robtarget values (`flat`, (N, 17), when made already), and
+    per block of rows its frame set."""
     if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
                        Placement.identity(0), np.zeros(0), np.zeros(0, int), [],
@@ -322,9 +402,13 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
         flat = np.fromiter(chain.from_iterable(r[k] for r in values), dtype=float)
         return flat.reshape(n, width)  # a value of another length fails here
 
-    trans, rot, extax = column(0, 3), column(1, 4), column(3, 6)
-    conf = column(2, 4).astype(int)
-    owner, count, which = (np.array(column, dtype=int) for column in zip(*blocks))
+    if flat is None:
+        trans, rot, conf, extax = (column(k, w) for k, w in enumerate(_WIDTHS))
+    else:
+        trans, rot, conf, extax = (np.ascontiguousarray(flat[:, a:b])
+                                   for a, b in ((0, 3), (3, 7), (7, 11), (11, 17)))
+    conf = conf.astype(int)
+    owner, count, which = (np.array(column, dtype=int) for column in blocks)
     row_set = np.repeat(which, count)
     # a stand-in for the frame sets that are reasons (no row uses them)
     usable = [f for f in sets if not isinstance(f, str)]
