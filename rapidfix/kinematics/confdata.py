@@ -8,10 +8,12 @@ axes 2 and 3 from where it is at θ = 0) + (θ5 < 0).
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix.compiled import load_kernel, numpy_only
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.batches import as_joint_batch
 from rapidfix.kinematics.ik_analytic import wrist_centre
@@ -139,6 +141,10 @@ def select_by_conf(
     if conf.shape not in ((4,), (n, 4)):
         raise KinematicsError(f"confdata must have shape (4,) or ({n}, 4), got {conf.shape}")
     conf = np.broadcast_to(conf, (n, 4))
+    kernel = load_kernel("rapidfix.kinematics.conf_compiled") if sols.backend == "numba" \
+        and n >= _COMPILED_FROM and not numpy_only() else None
+    if kernel is not None:
+        return _select_compiled(kernel, model, sols, conf)
     first, ambiguous = _turns_on_conf(sols, conf)
     candidate = np.all(first >= 0, axis=2)
     rows, branches = np.nonzero(candidate)
@@ -166,6 +172,39 @@ def select_by_conf(
 
 #: the boundary tolerance of an exact match (rad or mm), preferred over a rounded one
 EXACT_TOL = 1e-9
+#: batches smaller than this stay in numpy (a kernel call has a fixed cost)
+_COMPILED_FROM = 64
+
+
+def _select_compiled(kernel: ModuleType, model: RobotModel, sols: IKSolutions,
+                     conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`select_by_conf` by the compiled kernel (`conf_compiled`), where the IK's closed
+    form was compiled too: the same choice, one pass over the poses."""
+    n = len(sols)
+    w = np.ascontiguousarray(model.axis_dirs, dtype=float)
+    r = np.ascontiguousarray(model.axis_points, dtype=float)
+    c0 = wrist_centre(model.nominal)
+    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
+    fwd0 /= np.linalg.norm(fwd0)
+    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+    q = np.empty((n, 6))
+    found = np.empty(n, dtype=bool)
+    chosen = np.empty(n, dtype=np.int64)
+    any_valid = np.empty(n, dtype=bool)
+    redo = np.empty(n, dtype=bool)
+    kernel.select_on_conf(
+        np.ascontiguousarray(sols.base_q, dtype=float), np.ascontiguousarray(sols.reachable),
+        np.ascontiguousarray(sols.turn_ok), np.asarray(sols.counts, dtype=np.int64),
+        np.ascontiguousarray(conf, dtype=np.int64), w, r, np.asarray(c0, dtype=float), fwd0,
+        float(np.sign(side0)) if side0 != 0 else 1.0, CONF_TOL, CONF_TOL_MM, EXACT_TOL,
+        q, found, chosen, any_valid, redo)
+    status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
+    status[found & sols.base_singular[np.arange(n), chosen]] = IKStatus.WRIST_SINGULAR
+    status[~any_valid] = sols.status[~any_valid]
+    again = np.flatnonzero(redo)
+    if again.size:
+        q[again], status[again] = _select_expanded(model, _take(sols, again), conf[again])
+    return q, status
 
 
 def _prefer_exact(match: np.ndarray, rows: np.ndarray, branches: np.ndarray,

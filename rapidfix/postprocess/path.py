@@ -32,6 +32,8 @@ MARGIN = 0.8
 #: sampled further
 SCREEN = 0.1
 SCREEN_FRACTIONS = np.array([1.0 / 3.0, 2.0 / 3.0])
+#: the sample fractions the screen has not evaluated already (1/3 and 2/3 are both)
+_SAMPLES_LEFT = SAMPLE_FRACTIONS[~np.isin(SAMPLE_FRACTIONS, SCREEN_FRACTIONS)]
 MAX_ROUNDS = 8
 #: the smallest path tolerance (mm) accepted: the model's own resolution is coarser
 #: (cross-validated joint errors of ~1e-4° move the TCP by ~0.002 mm at 1 m), and a
@@ -254,9 +256,9 @@ def interval_deviation(
         return _sampled(curves, seg, qc0, qc1, predict, SAMPLE_FRACTIONS)
     dev = _sampled(curves, seg, qc0, qc1, predict, SCREEN_FRACTIONS)
     suspect = np.flatnonzero(dev > screen)
-    if suspect.size:
+    if suspect.size:  # the screen's fractions are among the samples: not again
         dev[suspect] = np.maximum(dev[suspect], _sampled(
-            curves, seg[suspect], qc0[suspect], qc1[suspect], predict, SAMPLE_FRACTIONS))
+            curves, seg[suspect], qc0[suspect], qc1[suspect], predict, _SAMPLES_LEFT))
     return dev
 
 
