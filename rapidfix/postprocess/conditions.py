@@ -366,6 +366,8 @@ class ProgramConditions:
         owner = np.asarray(targets.site, dtype=np.int64)
         site_motion = np.fromiter((site.index for site in sites), dtype=np.int64,
                                   count=len(sites))
+        #: per site: its instruction's place in `program.motions`
+        self.site_motion = site_motion
         motion_of_row = site_motion[owner] if n else np.zeros(0, dtype=np.int64)
         self._payload(targets, grips, motion_of_row)
         off, _ = config_monitoring(program)

@@ -61,38 +61,49 @@ class Curves:
 
     def __post_init__(self) -> None:
         a, b, c = self.start[:, :3, 3], self.end[:, :3, 3], self.via
-        n = np.cross(c - a, b - a)
-        n_len = np.linalg.norm(n, axis=1)
-        scale = np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)
-        arc = self.circular & (n_len > 1e-9 * scale * scale)
-        nrm = n / np.where(n_len > 0, n_len, 1.0)[:, None]
-        # circle centre: the point of the plane equidistant from a, b and c
-        # (circumcentre a + (|u|² v×w + |v|² w×u) / 2|w|², u = b−a, v = c−a, w = u×v = −n)
-        ab, ac = b - a, c - a
-        num = (
-            np.sum(ab * ab, axis=1)[:, None] * np.cross(ac, -n)
-            + np.sum(ac * ac, axis=1)[:, None] * np.cross(-n, ab)
-        )
-        centre = a + num / np.where(arc, 2.0 * n_len * n_len, 1.0)[:, None]
-        radius = np.linalg.norm(a - centre, axis=1)
-        u = (a - centre) / np.where(radius > 0, radius, 1.0)[:, None]
-        v = np.cross(nrm, u)
-        rel_b = b - centre
-        sweep = np.mod(np.arctan2(np.sum(rel_b * v, axis=1), np.sum(rel_b * u, axis=1)), 2 * np.pi)
+        m = a.shape[0]
+        arc = np.zeros(m, dtype=bool)
+        centre, u, v, nrm = (np.zeros((m, 3)) for _ in range(4))
+        radius, sweep = np.zeros(m), np.zeros(m)
+        rows = np.flatnonzero(self.circular)  # the circle's geometry: MoveC segments only
+        if rows.size:
+            a, b, c = a[rows], b[rows], c[rows]
+            n = np.cross(c - a, b - a)
+            n_len = np.linalg.norm(n, axis=1)
+            scale = np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)
+            on = n_len > 1e-9 * scale * scale
+            arc[rows] = on
+            nrm[rows] = n / np.where(n_len > 0, n_len, 1.0)[:, None]
+            # circle centre: the point of the plane equidistant from a, b and c
+            # (circumcentre a + (|u|² v×w + |v|² w×u) / 2|w|², u = b−a, v = c−a, w = u×v = −n)
+            ab, ac = b - a, c - a
+            num = (
+                np.sum(ab * ab, axis=1)[:, None] * np.cross(ac, -n)
+                + np.sum(ac * ac, axis=1)[:, None] * np.cross(-n, ab)
+            )
+            centre[rows] = a + num / np.where(on, 2.0 * n_len * n_len, 1.0)[:, None]
+            radius[rows] = np.linalg.norm(a - centre[rows], axis=1)
+            u[rows] = (a - centre[rows]) / np.where(radius[rows] > 0, radius[rows], 1.0)[:, None]
+            v[rows] = np.cross(nrm[rows], u[rows])
+            rel_b = b - centre[rows]
+            sweep[rows] = np.mod(np.arctan2(np.sum(rel_b * v[rows], axis=1),
+                                            np.sum(rel_b * u[rows], axis=1)), 2 * np.pi)
         object.__setattr__(self, "_arc", arc)
         object.__setattr__(self, "_geom", (centre, radius, u, v, nrm, sweep))
-        object.__setattr__(self, "_rel", None)
+        object.__setattr__(self, "_rel", np.zeros((m, 3)))
+        object.__setattr__(self, "_rel_known", np.zeros(m, dtype=bool))
 
-    def _turns(self) -> np.ndarray:
-        """(M,3) rotation vectors of the turn from each start to its end orientation,
-        R_a^T R_b in the start's frame; made when a pose along a path is first asked
-        for (a path the curvature bound settles needs none, nor scipy)."""
-        rel = self._rel  # type: ignore[attr-defined]
-        if rel is None:
-            rot_a = self.start[:, :3, :3]
-            rel = matrix_to_rotvec(np.swapaxes(rot_a, 1, 2) @ self.end[:, :3, :3])
-            object.__setattr__(self, "_rel", rel)
-        return rel
+    def _turns(self, seg: np.ndarray) -> np.ndarray:
+        """(K,3) rotation vectors of the turn from start to end orientation of segments
+        seg (K,), R_a^T R_b in the start's frame; each segment's made when a pose along
+        it is first asked for (a path the curvature bound settles needs none)."""
+        rel, known = self._rel, self._rel_known  # type: ignore[attr-defined]
+        new = np.unique(seg[~known[seg]])
+        if new.size:
+            rot_a = self.start[new, :3, :3]
+            rel[new] = matrix_to_rotvec(np.swapaxes(rot_a, 1, 2) @ self.end[new, :3, :3])
+            known[new] = True
+        return rel[seg]
 
     @property
     def degenerate(self) -> np.ndarray:
@@ -110,7 +121,7 @@ class Curves:
 
     def poses(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP poses (K,4,4): positions along the curve, orientation by slerp."""
-        rot_a, rel = self.start[seg, :3, :3], self._turns()[seg]
+        rot_a, rel = self.start[seg, :3, :3], self._turns(seg)
         out = np.zeros((seg.shape[0], 4, 4))
         out[:, :3, :3] = rot_a @ rotvec_to_matrix(s[:, None] * rel)
         out[:, :3, 3] = self.positions(seg, s)

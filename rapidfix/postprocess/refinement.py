@@ -59,8 +59,13 @@ class PathRefinement:
     direction: np.ndarray | None = None
 
     def _kept(self) -> np.ndarray:
-        """Per segment: whether its move is still emitted as a joint move."""
-        return np.array([self.mode.get(i) == "joint" for i in self.sites], dtype=bool)
+        """Per segment: whether its move is still emitted as a joint move (worked out
+        once: `mode` is not changed after refinement)."""
+        kept = self.__dict__.get("_kept_cache")
+        if kept is None:
+            kept = np.array([self.mode.get(i) == "joint" for i in self.sites], dtype=bool)
+            self.__dict__["_kept_cache"] = kept
+        return kept
 
     def points_added(self) -> int:
         """How many intermediate points the rewrite inserts."""
@@ -139,15 +144,23 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
         return PathRefinement(planned.solved, mode, filtered_reason, [])
     sites, motions = planned.sites, program.motions
     n = len(sites)
-    site_motion = np.fromiter((site.index for site in sites), dtype=np.int64, count=n)
+    t, p = planned.targets, planned.solved
+    site_motion = planned.conditions.site_motion
     site_of_motion = np.full(len(motions) + 1, -1, dtype=np.int64)  # [-1]: no motion
     site_of_motion[site_motion] = np.arange(n)
     compensated = np.zeros(n, dtype=bool)
-    compensated[list(mode)] = True
-    last_row = np.fromiter((site.rows[-1] if site.rows else -1 for site in sites),
-                           dtype=np.int64, count=n)
-    moves = np.array(sorted(i for i, m in mode.items()
-                            if m == "joint" and sites[i].kind in "LC"), dtype=np.int64)
+    compensated[np.fromiter(mode, dtype=np.int64, count=len(mode))] = True
+    # each site's first and last target row (-1: none); rows come in site order
+    owner = np.asarray(t.site, dtype=np.int64)
+    first_of = np.flatnonzero(np.diff(owner, prepend=-1))
+    first_row = np.full(n, -1, dtype=np.int64)
+    last_row = np.full(n, -1, dtype=np.int64)
+    first_row[owner[first_of]] = first_of
+    last_row[owner[first_of]] = np.append(first_of[1:], owner.size) - 1
+    kind = np.array([site.kind for site in sites], dtype="U1").reshape(n)
+    joint = np.zeros(n, dtype=bool)
+    joint[[i for i, m in mode.items() if m == "joint"]] = True
+    moves = np.flatnonzero(joint & ((kind == "L") | (kind == "C")))
     previous = planned.conditions.predecessors()[site_motion[moves]]
     after = site_of_motion[previous]  # the site of the motion before, or -1
     # a move after another compensated site starts where that one ends; one after an
@@ -163,17 +176,14 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     for i in moves[~keep].tolist():
         mode[i] = "filtered"
         filtered_reason[i] = START_UNKNOWN
-    segs = moves[keep].tolist()
+    seg_sites = moves[keep]
+    segs = seg_sites.tolist()
     from_row = start_rows[keep]
     absj = {k: starts[i] for k, i in enumerate(segs) if i in starts}
     if not segs:
         return PathRefinement(planned.solved, mode, filtered_reason, segs)
-    to_rows = [sites[i].rows[-1] for i in segs]
-    via_rows = [sites[i].rows[0] for i in segs]
-    circular_sites = [sites[i].kind == "C" for i in segs]
-    t, p = planned.targets, planned.solved
-    to_row, via_row = np.array(to_rows), np.array(via_rows)
-    circular = np.array(circular_sites, dtype=bool)
+    to_row, via_row = last_row[seg_sites], first_row[seg_sites]
+    circular = kind[seg_sites] == "C"
     q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
     start_flange = p.flange[from_row]  # the previous target's intended tool0 pose
     if absj:
