@@ -110,14 +110,29 @@ class Curves:
         """(M,) MoveC segments whose three points are (nearly) on one line."""
         return self.circular & ~self._arc  # type: ignore[attr-defined]
 
+    def _split(self, seg: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray | slice]:
+        """(rows on a line, rows on an arc) of segments seg: each kind of row is worked
+        out by its own formula only (a slice where all rows are of one kind)."""
+        arc = self._arc[seg]  # type: ignore[attr-defined]
+        if not arc.any():
+            return slice(None), slice(0, 0)
+        if arc.all():
+            return slice(0, 0), slice(None)
+        return np.flatnonzero(~arc), np.flatnonzero(arc)
+
     def positions(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP positions (K,3) at path fractions s (K,) of segments seg (K,)."""
-        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
-        line = a + s[:, None] * (b - a)
-        centre, radius, u, v, _, sweep = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
-        phi = s * sweep
-        circle = centre + radius[:, None] * (np.cos(phi)[:, None] * u + np.sin(phi)[:, None] * v)
-        return np.where(self._arc[seg][:, None], circle, line)  # type: ignore[attr-defined]
+        out = np.empty((seg.shape[0], 3))
+        on_line, on_arc = self._split(seg)
+        seg_l, s_l = seg[on_line], s[on_line]
+        a, b = self.start[seg_l, :3, 3], self.end[seg_l, :3, 3]
+        out[on_line] = a + s_l[:, None] * (b - a)
+        seg_c, s_c = seg[on_arc], s[on_arc]
+        centre, radius, u, v, _, sweep = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        phi = s_c * sweep
+        out[on_arc] = centre + radius[:, None] * (np.cos(phi)[:, None] * u
+                                                  + np.sin(phi)[:, None] * v)
+        return out
 
     def poses(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP poses (K,4,4): positions along the curve, orientation by slerp."""
@@ -130,17 +145,21 @@ class Curves:
 
     def distance(self, seg: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Distance (K,) mm of points (K,3) from the intended curves of segments seg (K,)."""
-        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
+        out = np.empty(seg.shape[0])
+        on_line, on_arc = self._split(seg)
+        seg_l, p = seg[on_line], points[on_line]
+        a, b = self.start[seg_l, :3, 3], self.end[seg_l, :3, 3]
         ab = b - a
         length2 = np.sum(ab * ab, axis=1)
-        t = np.clip(np.sum((points - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
-        to_line = np.linalg.norm(points - a - t[:, None] * ab, axis=1)
-        centre, radius, _, _, nrm, _ = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
-        d = points - centre
+        t = np.clip(np.sum((p - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
+        out[on_line] = np.linalg.norm(p - a - t[:, None] * ab, axis=1)
+        seg_c, p = seg[on_arc], points[on_arc]
+        centre, radius, _, _, nrm, _ = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        d = p - centre
         h = np.sum(d * nrm, axis=1)
         r = np.linalg.norm(d - h[:, None] * nrm, axis=1)
-        to_circle = np.hypot(r - radius, h)
-        return np.where(self._arc[seg], to_circle, to_line)  # type: ignore[attr-defined]
+        out[on_arc] = np.hypot(r - radius, h)
+        return out
 
 
 #: predicted TCP positions (K,3) in the segments' frames for commanded joints (K,6)
