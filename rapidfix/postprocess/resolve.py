@@ -253,22 +253,22 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
     """Sites for every robtarget motion instruction, and the rows of the usable targets.
 
     One cheap pass over the instructions: what depends only on an instruction's
-    name, or only on its tool / work object / load operands, is worked out once
-    per distinct name or operand set, and the numbers become arrays in one go. A
-    site of one target written in the program (the usual move) costs a few attribute
-    reads here; its orientation is checked with all the others on the arrays.
+    name, or only on its tool / work object / load operands (motions that share
+    those operands share one answer), is worked out once per distinct name or
+    operand set, and the numbers become arrays in one go. A site of one target
+    written in the program (the usual move) costs a few attribute reads here; its
+    orientation is checked with all the others on the arrays.
     """
     sites: list[Site] = []
     values: list[tuple] = []
     operands: list[Operand] = []
-    # per compensated site: its index, row count and frame set
-    owners: list[int] = []
-    counts: list[int] = []
-    which: list[int] = []
+    row_site: list[int] = []  # per row: its site and its frame set
+    row_set: list[int] = []
     frames = _FrameCache(outside)
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
-    by_tail: dict[Any, tuple[str | None, tuple]] = {}
+    # per shared tail: [why MoveAbsJ cannot take an option, frame key, frame set or None]
+    by_tail: dict[Any, list] = {}
     joint = emit == "jointtargets"
     deferred = False  # rows whose quaternion is checked on the arrays
     for index, motion in enumerate(program.motions):
@@ -285,32 +285,35 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         shared = motion.shared
         around = by_tail.get(shared) if shared is not None else None
         if around is None:
-            around = _around_targets(motion)
+            around = [*_around_targets(motion), None]
             if shared is not None:
                 by_tail[shared] = around
-        option_reason, key = around
         if reason is None and joint:
-            reason = option_reason
-        site = Site(motion, kind, site_ops, reason=reason, index=index)
-        sites.append(site)
+            reason = around[0]
         if reason is not None:
+            sites.append(Site(motion, kind, site_ops, [], reason, index))
             continue
-        known = frame_sets.get(key)
+        known = around[2]
         if known is None:
-            known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
+            known = frame_sets.get(around[1])
+            if known is None:
+                known = frame_sets[around[1]] = (_site_frames(motion, frames), len(frame_sets))
+            around[2] = known
         used, set_index = known
         if len(site_ops) == 1 and not isinstance(used, str):
             operand = site_ops[0]
             if operand.static and operand.value is not None \
                     and operand.type_name == "robtarget":
-                site.rows = [len(values)]
+                row = len(values)
+                row_site.append(len(sites))
+                sites.append(Site(motion, kind, site_ops, [row], None, index))
                 values.append(operand.value)  # the raw tuple, shape-checked by the RAPID layer
                 operands.append(operand)
-                owners.append(len(sites) - 1)
-                counts.append(1)
-                which.append(set_index)
+                row_set.append(set_index)
                 deferred = True
                 continue
+        site = Site(motion, kind, site_ops, [], None, index)
+        sites.append(site)
         found = _site_values(site_ops, outside)
         if isinstance(found, str):
             site.reason = found
@@ -322,17 +325,22 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         site.rows = [first] if len(found) == 1 else list(range(first, first + len(found)))
         values.extend(found)
         operands.extend(site_ops)
-        owners.append(len(sites) - 1)
-        counts.append(len(found))
-        which.append(set_index)
+        row_site.extend([len(sites) - 1] * len(found))
+        row_set.extend([set_index] * len(found))
     sets = [used for used, _ in frame_sets.values()]  # by index: insertion order
-    blocks = (owners, counts, which)
     flat = _flat_values(values)
     if deferred and flat is not None:
         zero = _zero_quaternions(flat)
         if zero.any():
-            values, operands, blocks, flat = _drop_rows(sites, values, operands, blocks, zero)
-    return sites, _arrays(values, operands, blocks, sets, flat)
+            keep = ~zero
+            _drop_rows(sites, row_site, zero)
+            rows = np.flatnonzero(keep).tolist()
+            values = [values[r] for r in rows]
+            operands = [operands[r] for r in rows]
+            row_site = [row_site[r] for r in rows]
+            row_set = [row_set[r] for r in rows]
+            flat = flat[keep]
+    return sites, _arrays(values, operands, (row_site, row_set), sets, flat)
 
 
 #: numbers of a robtarget value: position 3, quaternion 4, confdata 4, external axes 6
@@ -360,37 +368,26 @@ def _zero_quaternions(flat: np.ndarray) -> np.ndarray:
     return q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3] < 1e-12
 
 
-def _drop_rows(sites: list[Site], values: list[tuple], operands: list[Operand],
-               blocks: tuple[list[int], list[int], list[int]], zero: np.ndarray
-               ) -> tuple[list[tuple], list[Operand], tuple[list[int], list[int], list[int]],
-                          np.ndarray]:
-    """Leave out the sites of one target whose quaternion is zero (rare): they get that
-    reason, and the rows after them move up."""
-    owners, counts, which = blocks
-    keep = ~zero
-    new_row = np.cumsum(keep) - 1
-    kept_blocks: tuple[list[int], list[int], list[int]] = ([], [], [])
-    for owner, count, frame_set in zip(owners, counts, which):
-        site = sites[owner]
-        if zero[site.rows[0]]:  # only one-target sites are checked on the arrays
-            site.reason = operand_label(site.targets, site.targets[0]) \
-                + "orientation quaternion is zero"
-            site.rows = []
-            continue
+def _drop_rows(sites: list[Site], row_site: list[int], zero: np.ndarray) -> None:
+    """The sites of one target whose quaternion is zero (rare) get that reason and no
+    rows; the rows of the others move up."""
+    new_row = np.cumsum(~zero) - 1
+    for site_index in sorted({row_site[r] for r in np.flatnonzero(zero).tolist()}):
+        site = sites[site_index]  # only one-target sites are checked on the arrays
+        site.reason = operand_label(site.targets, site.targets[0]) \
+            + "orientation quaternion is zero"
+        site.rows = []
+    first = int(np.argmax(zero))
+    for site_index in sorted(set(row_site[first:])):
+        site = sites[site_index]
         site.rows = [int(new_row[r]) for r in site.rows]
-        for part, item in zip(kept_blocks, (owner, count, frame_set)):
-            part.append(item)
-    rows = np.flatnonzero(keep).tolist()
-    values = [values[r] for r in rows]
-    operands = [operands[r] for r in rows]
-    return values, operands, kept_blocks, _flat_values(values)
 
 
 def _arrays(values: list[tuple], operands: list[Operand],
-            blocks: tuple[list[int], list[int], list[int]], sets: list[_Frames | str],
+            rows: tuple[list[int], list[int]], sets: list[_Frames | str],
             flat: np.ndarray | None = None) -> Targets:
     """The rows as arrays: raw robtarget values (`flat`, (N, 17), when made already), and
-    per block of rows its frame set."""
+    per row its site and frame set (`rows`)."""
     if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
                        Placement.identity(0), np.zeros(0), np.zeros(0, int), [],
@@ -408,8 +405,7 @@ def _arrays(values: list[tuple], operands: list[Operand],
         trans, rot, conf, extax = (np.ascontiguousarray(flat[:, a:b])
                                    for a, b in ((0, 3), (3, 7), (7, 11), (11, 17)))
     conf = conf.astype(int)
-    owner, count, which = (np.array(column, dtype=int) for column in blocks)
-    row_set = np.repeat(which, count)
+    owner, row_set = (np.array(column, dtype=int) for column in rows)
     # a stand-in for the frame sets that are reasons (no row uses them)
     usable = [f for f in sets if not isinstance(f, str)]
     chosen = [f if not isinstance(f, str) else usable[0] for f in sets]
@@ -428,7 +424,7 @@ def _arrays(values: list[tuple], operands: list[Operand],
     else:
         placement = Placement(tool[row_set], wobj[row_set], stationary[row_set])
     return Targets(pose(trans, rot), conf, extax, placement, mass[row_set],
-                   np.repeat(owner, count), operands, cog[row_set], total[row_set])
+                   owner, operands, cog[row_set], total[row_set])
 
 
 def _poses(frames: list[Any]) -> np.ndarray:
