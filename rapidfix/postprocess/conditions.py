@@ -369,8 +369,10 @@ class ProgramConditions:
         owner = np.asarray(targets.site, dtype=np.int64)
         site_motion = np.fromiter((site.index for site in sites), dtype=np.int64,
                                   count=len(sites))
-        #: per site: its instruction's place in `program.motions`
+        #: per site: its instruction's place in `program.motions`, and its kind ('L', 'J',
+        #: 'C' or 'X', `Site.kind`)
         self.site_motion = site_motion
+        self.site_kind = np.array([site.kind for site in sites], dtype="U1").reshape(len(sites))
         motion_of_row = site_motion[owner] if n else np.zeros(0, dtype=np.int64)
         self._payload(targets, grips, motion_of_row)
         off, _ = config_monitoring(program)
@@ -402,8 +404,7 @@ class ProgramConditions:
             known = before >= 0
             prev_row[first[known]] = last_point[before[known]]
             several = known & (last > first)
-            circular = np.fromiter((site.kind == "C" for site in sites), dtype=bool,
-                                   count=len(sites))[owner[first]]
+            circular = (self.site_kind == "C")[owner[first]]
             # MoveAbsJ: the CirPoint is not a stop; else the controller's arc passes the
             # CirPoint, then the ToPoint (rows of one site follow each other)
             to_end = several & circular if joint_moves else np.zeros_like(several)

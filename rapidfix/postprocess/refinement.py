@@ -157,7 +157,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     last_row = np.full(n, -1, dtype=np.int64)
     first_row[owner[first_of]] = first_of
     last_row[owner[first_of]] = np.append(first_of[1:], owner.size) - 1
-    kind = np.array([site.kind for site in sites], dtype="U1").reshape(n)
+    kind = planned.conditions.site_kind
     joint = np.zeros(n, dtype=bool)
     joint[[i for i, m in mode.items() if m == "joint"]] = True
     moves = np.flatnonzero(joint & ((kind == "L") | (kind == "C")))
@@ -179,7 +179,9 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     seg_sites = moves[keep]
     segs = seg_sites.tolist()
     from_row = start_rows[keep]
-    absj = {k: starts[i] for k, i in enumerate(segs) if i in starts}
+    # segment -> the joints of the MoveAbsJ it follows (segments are in site order)
+    at = np.searchsorted(seg_sites, np.fromiter(starts, dtype=np.int64, count=len(starts)))
+    absj = {int(k): starts[i] for k, i in sorted(zip(at.tolist(), starts))}
     if not segs:
         return PathRefinement(planned.solved, mode, filtered_reason, segs)
     to_row, via_row = last_row[seg_sites], first_row[seg_sites]
