@@ -224,12 +224,9 @@ _MONITOR_WORDS = re.compile(r"\bconf[lj]\b", re.IGNORECASE)
 
 
 def _mentions_monitoring(text: str) -> bool:
-    """Whether the text has the word ConfL or ConfJ in any case. Plain searches first (the
-    case-blind pattern alone reads a large program at about 0.1 µs a character): without
-    "nf" in one of its four cases the words cannot be there, and without "confl" or
-    "confj" in the lowered text neither."""
-    if not any(pair in text for pair in ("nf", "nF", "Nf", "NF")):
-        return False
+    """Whether the text has the word ConfL or ConfJ in any case. A plain search of the
+    lowered text first (the case-blind pattern alone reads a large program at about
+    0.1 µs a character): without either letter sequence the pattern cannot match."""
     lowered = text.lower()
     if "confl" not in lowered and "confj" not in lowered:
         return False
