@@ -13,6 +13,7 @@ here edits text.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -58,27 +59,24 @@ class PathRefinement:
     context: Context | None = None
     direction: np.ndarray | None = None
 
+    @cached_property
     def _kept(self) -> np.ndarray:
         """Per segment: whether its move is still emitted as a joint move (worked out
         once: `mode` is not changed after refinement)."""
-        kept = self.__dict__.get("_kept_cache")
-        if kept is None:
-            kept = np.array([self.mode.get(i) == "joint" for i in self.sites], dtype=bool)
-            self.__dict__["_kept_cache"] = kept
-        return kept
+        return np.array([self.mode.get(i) == "joint" for i in self.sites], dtype=bool)
 
     def points_added(self) -> int:
         """How many intermediate points the rewrite inserts."""
         if self.points is None:
             return 0
-        return int(np.isin(self.points.seg, np.flatnonzero(self._kept())).sum())
+        return int(np.isin(self.points.seg, np.flatnonzero(self._kept)).sum())
 
     def worst_path_mm(self) -> float | None:
         """The largest predicted deviation (mm) from a line or arc of the moves kept as
         joint moves; None when there are none."""
         if self.points is None:
             return None
-        keep = self._kept()
+        keep = self._kept
         return float(self.points.deviation[keep].max()) if keep.any() else None
 
     def intermediates(self) -> dict[int, tuple[int, int]]:
