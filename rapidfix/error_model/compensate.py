@@ -117,12 +117,18 @@ def _per_joint_newton(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """(θc, |residual| per joint, iterations) for one chunk of poses."""
     x = target - model.delta(target, ctx)
-    residual = x + model.delta(x, ctx) - target
+    # the first Newton step needs the derivative where the residual is taken: both at once
+    delta, first_slope = model.delta_and_derivative(x, ctx)
+    derivative: np.ndarray | None = first_slope
+    residual = x + delta - target
     step = np.abs(residual)
     iterations = 0
     while iterations < max_iter and np.any(step > tol):
         iterations += 1
-        slope = 1.0 + model.delta_derivative(x, ctx)
+        if derivative is None:
+            derivative = model.delta_derivative(x, ctx)
+        slope = 1.0 + derivative
+        derivative = None
         slope = np.where(np.abs(slope) > 0.1, slope, 1.0)  # fixed-point step if flat
         active = np.abs(residual) > tol
         x = np.where(active, x - residual / slope, x)

@@ -116,8 +116,9 @@ class RBFNetwork:
         d *= 1.0 / self.width
         return d
 
-    def _compiled_sums(self, x: np.ndarray, slope: bool) -> np.ndarray | None:
-        """Σ w_k g_k (slope: Σ w_k g_k d_k) by the compiled kernel, or None without it."""
+    def _compiled_sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray | None:
+        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)) by the compiled kernel,
+        or None without it."""
         if x.shape[0] < _COMPILED_FROM or not _COMPILED.get():
             return None
         kernel = _kernel()
@@ -130,9 +131,14 @@ class RBFNetwork:
         _, c, even = known
         k = c.shape[0]
         step = (c[-1] - c[0]) / max(k - 1, 1) / self.width
+        weights = np.ascontiguousarray(self.weights[:k], dtype=float)
+        if slope is None:
+            both = np.empty((2, x.shape[0]))
+            kernel.gaussian_sums_both(np.ascontiguousarray(x), c, 1.0 / self.width, weights,
+                                      step, even, both[0], both[1])
+            return both
         out = np.empty(x.shape[0])
-        kernel.gaussian_sums(np.ascontiguousarray(x), c, 1.0 / self.width,
-                             np.ascontiguousarray(self.weights[:k], dtype=float), step,
+        kernel.gaussian_sums(np.ascontiguousarray(x), c, 1.0 / self.width, weights, step,
                              even, slope, out)
         return out
 
@@ -165,6 +171,26 @@ class RBFNetwork:
         np.exp(g, out=g)
         g *= d
         return -(g @ self.weights[:k]) / self.width + self.weights[k + 1] / half
+
+    def value_and_derivative(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`value(x)` and `derivative(x)` from one pass over the centres (each the same
+        numbers as its own call): a Newton step needs both at the same angles."""
+        x = np.ravel(np.asarray(x, dtype=float))
+        k = self.centres.shape[0]
+        half = max(0.5 * (self.hi - self.lo), 1e-12)
+        both = self._compiled_sums(x, slope=None)
+        if both is not None:
+            sums, slopes = both[0], both[1]
+        else:
+            d = self._scaled_offsets(x)
+            g = np.square(d)
+            g *= -0.5
+            np.exp(g, out=g)
+            sums = g @ self.weights[:k]
+            g *= d
+            slopes = g @ self.weights[:k]
+        value = sums + self.weights[k] + self.weights[k + 1] * self._u(x)
+        return value, -slopes / self.width + self.weights[k + 1] / half
 
     def to_dict(self) -> dict[str, Any]:
         """JSON data (weights are the effect's parameters and stored there)."""
@@ -434,6 +460,21 @@ class JointRBF(Effect):
                 inside = (x >= net.lo) & (x <= net.hi)
                 out[:, j] = np.where(inside, net.derivative(np.clip(x, net.lo, net.hi)), 0.0)
         return out
+
+    def joint_delta_and_derivative(self, q_cmd: np.ndarray,
+                                   ctx: Context) -> tuple[np.ndarray, np.ndarray]:
+        """`joint_delta` and `joint_delta_derivative` at once (one pass per network)."""
+        q = np.atleast_2d(np.asarray(q_cmd, dtype=float))
+        out = np.zeros_like(q)
+        slope = np.zeros_like(q)
+        for j, net in enumerate(self.networks):
+            if net is not None:
+                x = q[:, j]
+                inside = (x >= net.lo) & (x <= net.hi)
+                value, derivative = net.value_and_derivative(self._inside(j, net, x))
+                out[:, j] = value
+                slope[:, j] = np.where(inside, derivative, 0.0)
+        return out, slope
 
     def _state(self) -> dict[str, Any]:
         return {

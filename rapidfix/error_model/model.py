@@ -140,6 +140,25 @@ class ErrorModel:
         """Σ ∂Δθ_j/∂θ_j (N, 6) of the joint-error effects (exact for separable ones)."""
         return self._joint_sum("joint_delta_derivative", q_cmd, ctx)
 
+    def delta_and_derivative(self, q_cmd: np.ndarray,
+                             ctx: Context | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """`delta` and `delta_derivative` at the same joints: the same numbers, one pass
+        over an effect that can make both at once (`joint_delta_and_derivative`)."""
+        q = _joints(q_cmd)
+        ctx = EMPTY if ctx is None else ctx
+        out = np.zeros_like(q)
+        slope = np.zeros_like(q)
+        for eff in self.effects:
+            if eff.adds_joint_delta:
+                both = getattr(eff, "joint_delta_and_derivative", None)
+                if both is not None:
+                    value, derivative = both(q, ctx)
+                else:
+                    value, derivative = eff.joint_delta(q, ctx), eff.joint_delta_derivative(q, ctx)
+                out += value
+                slope += derivative
+        return out, slope
+
     def _joint_sum(self, term: str, q_cmd: np.ndarray, ctx: Context | None) -> np.ndarray:
         """Σ over the joint-error effects of their method `term`(q, ctx), (N, 6)."""
         q = _joints(q_cmd)

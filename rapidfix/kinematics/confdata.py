@@ -8,10 +8,12 @@ axes 2 and 3 from where it is at θ = 0) + (θ5 < 0).
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rapidfix.compiled import load_kernel, numpy_only
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.batches import as_joint_batch
 from rapidfix.kinematics.ik_analytic import wrist_centre
@@ -86,7 +88,12 @@ def conf_matches(
 ) -> np.ndarray:
     """(...,) mask: joints q (..., 6) have confdata `conf` (..., 4); values within `tol`
     (rad) or `tol_mm` of a boundary match both sides."""
-    k = conf_quantities(model, q)
+    return _quantities_match(conf_quantities(model, q), conf, tol, tol_mm)
+
+
+def _quantities_match(k: np.ndarray, conf: np.ndarray, tol: float, tol_mm: float) -> np.ndarray:
+    """`conf_matches` on the quantities `conf_quantities` gave (so that one evaluation of
+    the geometry serves several tolerances)."""
     conf = np.asarray(conf)
     with np.errstate(invalid="ignore"):
         ok = np.ones(k.shape[:-1], dtype=bool)
@@ -134,14 +141,19 @@ def select_by_conf(
     if conf.shape not in ((4,), (n, 4)):
         raise KinematicsError(f"confdata must have shape (4,) or ({n}, 4), got {conf.shape}")
     conf = np.broadcast_to(conf, (n, 4))
+    kernel = load_kernel("rapidfix.kinematics.conf_compiled") if sols.backend == "numba" \
+        and n >= _COMPILED_FROM and not numpy_only() else None
+    if kernel is not None:
+        return _select_compiled(kernel, model, sols, conf)
     first, ambiguous = _turns_on_conf(sols, conf)
     candidate = np.all(first >= 0, axis=2)
     rows, branches = np.nonzero(candidate)
     q_cand = sols.base_q[rows, branches] + 2.0 * np.pi * first[rows, branches]
+    k = conf_quantities(model, q_cand)  # once, for the rounded and the exact test
     match = np.zeros((n, 8), dtype=bool)
-    match[rows, branches] = conf_matches(model, q_cand, conf[rows])
+    match[rows, branches] = _quantities_match(k, conf[rows], CONF_TOL, CONF_TOL_MM)
     found = match.any(axis=1)
-    chosen = _prefer_exact(match, rows, branches, model, q_cand, conf[rows])
+    chosen = _prefer_exact(match, rows, branches, k, conf[rows])
     q = np.full((n, 6), np.nan)
     q[found] = sols.base_q[found, chosen[found]] + 2.0 * np.pi * first[found, chosen[found]]
     status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
@@ -160,14 +172,48 @@ def select_by_conf(
 
 #: the boundary tolerance of an exact match (rad or mm), preferred over a rounded one
 EXACT_TOL = 1e-9
+#: batches smaller than this stay in numpy (a kernel call has a fixed cost)
+_COMPILED_FROM = 64
+
+
+def _select_compiled(kernel: ModuleType, model: RobotModel, sols: IKSolutions,
+                     conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`select_by_conf` by the compiled kernel (`conf_compiled`), where the IK's closed
+    form was compiled too: the same choice, one pass over the poses."""
+    n = len(sols)
+    w = np.ascontiguousarray(model.axis_dirs, dtype=float)
+    r = np.ascontiguousarray(model.axis_points, dtype=float)
+    c0 = wrist_centre(model.nominal)
+    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
+    fwd0 /= np.linalg.norm(fwd0)
+    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+    q = np.empty((n, 6))
+    found = np.empty(n, dtype=bool)
+    chosen = np.empty(n, dtype=np.int64)
+    any_valid = np.empty(n, dtype=bool)
+    redo = np.empty(n, dtype=bool)
+    kernel.select_on_conf(
+        np.ascontiguousarray(sols.base_q, dtype=float), np.ascontiguousarray(sols.reachable),
+        np.ascontiguousarray(sols.turn_ok), np.asarray(sols.counts, dtype=np.int64),
+        np.ascontiguousarray(conf, dtype=np.int64), w, r, np.asarray(c0, dtype=float), fwd0,
+        float(np.sign(side0)) if side0 != 0 else 1.0, CONF_TOL, CONF_TOL_MM, EXACT_TOL,
+        q, found, chosen, any_valid, redo)
+    status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
+    status[found & sols.base_singular[np.arange(n), chosen]] = IKStatus.WRIST_SINGULAR
+    status[~any_valid] = sols.status[~any_valid]
+    again = np.flatnonzero(redo)
+    if again.size:
+        q[again], status[again] = _select_expanded(model, _take(sols, again), conf[again])
+    return q, status
 
 
 def _prefer_exact(match: np.ndarray, rows: np.ndarray, branches: np.ndarray,
-                  model: RobotModel, q_cand: np.ndarray, conf: np.ndarray) -> np.ndarray:
+                  quantities: np.ndarray, conf: np.ndarray) -> np.ndarray:
     """Per pose the first matching slot, one that matches exactly (not only within the
-    rounding tolerance of a boundary) if there is one."""
+    rounding tolerance of a boundary) if there is one; `quantities` are the candidates'
+    `conf_quantities`."""
     exact = np.zeros_like(match)
-    exact[rows, branches] = conf_matches(model, q_cand, conf, EXACT_TOL, EXACT_TOL)
+    exact[rows, branches] = _quantities_match(quantities, conf, EXACT_TOL, EXACT_TOL)
     exact &= match
     return np.where(exact.any(axis=1), np.argmax(exact, axis=1), np.argmax(match, axis=1))
 

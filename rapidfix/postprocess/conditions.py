@@ -349,8 +349,6 @@ class ProgramConditions:
     def __init__(self, program: Program, sites: list[Any], targets: Any,
                  outside: Declarations, temperature_c: float | None,
                  needs: frozenset[str], *, joint_moves: bool = True) -> None:
-        from rapidfix.postprocess.chain import predecessors
-
         n = len(targets.site)
         self.temperature_c = temperature_c
         self.needs = needs
@@ -361,50 +359,78 @@ class ProgramConditions:
         self.grip_unknown = 0
         self.grip_statements = 0
         grips = grip_loads(program, outside) if "payload_kg" in needs else None
-        motion_of_row = np.zeros(n, dtype=np.int64)
-        for site in sites:
-            if site.rows:
-                motion_of_row[site.rows] = site.index
+        motions = program.motions
+        self._program = program
+        self._pred: np.ndarray | None = None
+        # the rows in blocks, one per site with rows (contiguous, in site order)
+        owner = np.asarray(targets.site, dtype=np.int64)
+        site_motion = np.fromiter((site.index for site in sites), dtype=np.int64,
+                                  count=len(sites))
+        #: per site: its instruction's place in `program.motions`, and its kind ('L', 'J',
+        #: 'C' or 'X', `Site.kind`)
+        self.site_motion = site_motion
+        self.site_kind = np.array([site.kind for site in sites], dtype="U1").reshape(len(sites))
+        motion_of_row = site_motion[owner] if n else np.zeros(0, dtype=np.int64)
         self._payload(targets, grips, motion_of_row)
         off, _ = config_monitoring(program)
         #: rows that run with configuration monitoring off (ConfL/ConfJ \Off)
         self.config_free = off[motion_of_row] if n else np.zeros(0, dtype=bool)
         chain = "last_direction" in needs or bool(self.config_free.any())
         # the points the chain runs through: target rows, then known MoveAbsJ joints
-        motions = program.motions
+        first = np.flatnonzero(np.diff(owner, prepend=-1)) if n else np.zeros(0, np.int64)
+        last = np.append(first[1:], n) - 1
+        block_motion = site_motion[owner[first]]
         last_point = np.full(len(motions), -1, dtype=np.int64)
+        last_point[block_motion] = last
         prev_row = np.full(n, -1, dtype=np.int64)
         extra: list[np.ndarray] = []
-        pred = predecessors(program) if chain else [-1] * len(motions)
-        site_of = {site.index: site for site in sites if site.rows}
-        for k, motion in enumerate(motions):  # one pass over the instructions, no math
-            site = site_of.get(k)
-            if site is not None:
-                last_point[k] = site.rows[-1]
-                continue
-            joints = _absj_joints(motion) if chain else None
-            if joints is not None:
-                last_point[k] = n + len(extra)
-                extra.append(joints)
+        absj: list[int] = []
+        if chain:  # known MoveAbsJ joints: among the instructions that are no site
+            is_site = np.zeros(len(motions), dtype=bool)
+            is_site[site_motion] = True
+            for k in np.flatnonzero(~is_site).tolist():
+                joints = _absj_joints(motions[k])
+                if joints is not None:
+                    last_point[k] = n + len(extra)
+                    extra.append(joints)
+                    absj.append(k)
         extra_prev = np.full(len(extra), -1, dtype=np.int64)
-        for k, before in enumerate(pred):
-            if before < 0:
-                continue
-            site = site_of.get(k)
-            if site is not None:
-                prev_row[site.rows[0]] = last_point[before]
-                if joint_moves and site.kind == "C":  # MoveAbsJ: the CirPoint is not a stop
-                    prev_row[site.rows[-1]] = last_point[before]
-                else:  # the controller's arc passes the CirPoint, then the ToPoint
-                    for a, b in zip(site.rows, site.rows[1:]):
-                        prev_row[b] = a
-            elif last_point[k] >= n:
-                extra_prev[last_point[k] - n] = last_point[before]
+        if chain and n:
+            pred = self.predecessors()
+            before = pred[block_motion]
+            known = before >= 0
+            prev_row[first[known]] = last_point[before[known]]
+            several = known & (last > first)
+            circular = (self.site_kind == "C")[owner[first]]
+            # MoveAbsJ: the CirPoint is not a stop; else the controller's arc passes the
+            # CirPoint, then the ToPoint (rows of one site follow each other)
+            to_end = several & circular if joint_moves else np.zeros_like(several)
+            prev_row[last[to_end]] = last_point[before[to_end]]
+            follow = several & ~to_end
+            if follow.any():
+                block = np.repeat(np.arange(first.size), last - first + 1)  # of each row
+                rows = np.arange(n)
+                inner = np.flatnonzero(follow[block] & (rows != first[block]))
+                prev_row[inner] = inner - 1
+        if chain and absj:
+            pred = self.predecessors()
+            for i, k in enumerate(absj):
+                if pred[k] >= 0:
+                    extra_prev[i] = last_point[pred[k]]
         self.prev = np.concatenate([prev_row, extra_prev])
         self.extra = np.array(extra, dtype=float).reshape(-1, 6)
         self.n = n
         self.unknown_start = int(np.count_nonzero(prev_row < 0)) if n else 0
         self.forced: np.ndarray | None = None
+
+    def predecessors(self) -> np.ndarray:
+        """Per motion of the program: the motion executed just before it (-1: not known
+        before run time), `chain.predecessors`, worked out once per rewrite."""
+        if self._pred is None:
+            from rapidfix.postprocess.chain import predecessors
+
+            self._pred = np.asarray(predecessors(self._program), dtype=np.int64)
+        return self._pred
 
     def _payload(self, targets: Any, grips: GripLoads | None, motion_of_row: np.ndarray) -> None:
         """Mass and centre of gravity per row: the tool's load plus the gripped load."""

@@ -32,6 +32,8 @@ MARGIN = 0.8
 #: sampled further
 SCREEN = 0.1
 SCREEN_FRACTIONS = np.array([1.0 / 3.0, 2.0 / 3.0])
+#: the sample fractions the screen has not evaluated already (1/3 and 2/3 are both)
+_SAMPLES_LEFT = SAMPLE_FRACTIONS[~np.isin(SAMPLE_FRACTIONS, SCREEN_FRACTIONS)]
 MAX_ROUNDS = 8
 #: the smallest path tolerance (mm) accepted: the model's own resolution is coarser
 #: (cross-validated joint errors of ~1e-4° move the TCP by ~0.002 mm at 1 m), and a
@@ -59,56 +61,82 @@ class Curves:
 
     def __post_init__(self) -> None:
         a, b, c = self.start[:, :3, 3], self.end[:, :3, 3], self.via
-        n = np.cross(c - a, b - a)
-        n_len = np.linalg.norm(n, axis=1)
-        scale = np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)
-        arc = self.circular & (n_len > 1e-9 * scale * scale)
-        nrm = n / np.where(n_len > 0, n_len, 1.0)[:, None]
-        # circle centre: the point of the plane equidistant from a, b and c
-        # (circumcentre a + (|u|² v×w + |v|² w×u) / 2|w|², u = b−a, v = c−a, w = u×v = −n)
-        ab, ac = b - a, c - a
-        num = (
-            np.sum(ab * ab, axis=1)[:, None] * np.cross(ac, -n)
-            + np.sum(ac * ac, axis=1)[:, None] * np.cross(-n, ab)
-        )
-        centre = a + num / np.where(arc, 2.0 * n_len * n_len, 1.0)[:, None]
-        radius = np.linalg.norm(a - centre, axis=1)
-        u = (a - centre) / np.where(radius > 0, radius, 1.0)[:, None]
-        v = np.cross(nrm, u)
-        rel_b = b - centre
-        sweep = np.mod(np.arctan2(np.sum(rel_b * v, axis=1), np.sum(rel_b * u, axis=1)), 2 * np.pi)
+        m = a.shape[0]
+        arc = np.zeros(m, dtype=bool)
+        centre, u, v, nrm = (np.zeros((m, 3)) for _ in range(4))
+        radius, sweep = np.zeros(m), np.zeros(m)
+        rows = np.flatnonzero(self.circular)  # the circle's geometry: MoveC segments only
+        if rows.size:
+            a, b, c = a[rows], b[rows], c[rows]
+            n = np.cross(c - a, b - a)
+            n_len = np.linalg.norm(n, axis=1)
+            scale = np.maximum(np.linalg.norm(b - a, axis=1), 1e-9)
+            on = n_len > 1e-9 * scale * scale
+            arc[rows] = on
+            nrm[rows] = n / np.where(n_len > 0, n_len, 1.0)[:, None]
+            # circle centre: the point of the plane equidistant from a, b and c
+            # (circumcentre a + (|u|² v×w + |v|² w×u) / 2|w|², u = b−a, v = c−a, w = u×v = −n)
+            ab, ac = b - a, c - a
+            num = (
+                np.sum(ab * ab, axis=1)[:, None] * np.cross(ac, -n)
+                + np.sum(ac * ac, axis=1)[:, None] * np.cross(-n, ab)
+            )
+            centre[rows] = a + num / np.where(on, 2.0 * n_len * n_len, 1.0)[:, None]
+            radius[rows] = np.linalg.norm(a - centre[rows], axis=1)
+            u[rows] = (a - centre[rows]) / np.where(radius[rows] > 0, radius[rows], 1.0)[:, None]
+            v[rows] = np.cross(nrm[rows], u[rows])
+            rel_b = b - centre[rows]
+            sweep[rows] = np.mod(np.arctan2(np.sum(rel_b * v[rows], axis=1),
+                                            np.sum(rel_b * u[rows], axis=1)), 2 * np.pi)
         object.__setattr__(self, "_arc", arc)
         object.__setattr__(self, "_geom", (centre, radius, u, v, nrm, sweep))
-        object.__setattr__(self, "_rel", None)
+        object.__setattr__(self, "_rel", np.zeros((m, 3)))
+        object.__setattr__(self, "_rel_known", np.zeros(m, dtype=bool))
 
-    def _turns(self) -> np.ndarray:
-        """(M,3) rotation vectors of the turn from each start to its end orientation,
-        R_a^T R_b in the start's frame; made when a pose along a path is first asked
-        for (a path the curvature bound settles needs none, nor scipy)."""
-        rel = self._rel  # type: ignore[attr-defined]
-        if rel is None:
-            rot_a = self.start[:, :3, :3]
-            rel = matrix_to_rotvec(np.swapaxes(rot_a, 1, 2) @ self.end[:, :3, :3])
-            object.__setattr__(self, "_rel", rel)
-        return rel
+    def _turns(self, seg: np.ndarray) -> np.ndarray:
+        """(K,3) rotation vectors of the turn from start to end orientation of segments
+        seg (K,), R_a^T R_b in the start's frame; each segment's made when a pose along
+        it is first asked for (a path the curvature bound settles needs none)."""
+        rel, known = self._rel, self._rel_known  # type: ignore[attr-defined]
+        new = np.unique(seg[~known[seg]])
+        if new.size:
+            rot_a = self.start[new, :3, :3]
+            rel[new] = matrix_to_rotvec(np.swapaxes(rot_a, 1, 2) @ self.end[new, :3, :3])
+            known[new] = True
+        return rel[seg]
 
     @property
     def degenerate(self) -> np.ndarray:
         """(M,) MoveC segments whose three points are (nearly) on one line."""
         return self.circular & ~self._arc  # type: ignore[attr-defined]
 
+    def _split(self, seg: np.ndarray) -> tuple[np.ndarray | slice, np.ndarray | slice]:
+        """(rows on a line, rows on an arc) of segments seg: each kind of row is worked
+        out by its own formula only (a slice where all rows are of one kind)."""
+        arc = self._arc[seg]  # type: ignore[attr-defined]
+        if not arc.any():
+            return slice(None), slice(0, 0)
+        if arc.all():
+            return slice(0, 0), slice(None)
+        return np.flatnonzero(~arc), np.flatnonzero(arc)
+
     def positions(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP positions (K,3) at path fractions s (K,) of segments seg (K,)."""
-        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
-        line = a + s[:, None] * (b - a)
-        centre, radius, u, v, _, sweep = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
-        phi = s * sweep
-        circle = centre + radius[:, None] * (np.cos(phi)[:, None] * u + np.sin(phi)[:, None] * v)
-        return np.where(self._arc[seg][:, None], circle, line)  # type: ignore[attr-defined]
+        out = np.empty((seg.shape[0], 3))
+        on_line, on_arc = self._split(seg)
+        seg_l, s_l = seg[on_line], s[on_line]
+        a, b = self.start[seg_l, :3, 3], self.end[seg_l, :3, 3]
+        out[on_line] = a + s_l[:, None] * (b - a)
+        seg_c, s_c = seg[on_arc], s[on_arc]
+        centre, radius, u, v, _, sweep = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        phi = s_c * sweep
+        out[on_arc] = centre + radius[:, None] * (np.cos(phi)[:, None] * u
+                                                  + np.sin(phi)[:, None] * v)
+        return out
 
     def poses(self, seg: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Intended TCP poses (K,4,4): positions along the curve, orientation by slerp."""
-        rot_a, rel = self.start[seg, :3, :3], self._turns()[seg]
+        rot_a, rel = self.start[seg, :3, :3], self._turns(seg)
         out = np.zeros((seg.shape[0], 4, 4))
         out[:, :3, :3] = rot_a @ rotvec_to_matrix(s[:, None] * rel)
         out[:, :3, 3] = self.positions(seg, s)
@@ -117,17 +145,21 @@ class Curves:
 
     def distance(self, seg: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Distance (K,) mm of points (K,3) from the intended curves of segments seg (K,)."""
-        a, b = self.start[seg, :3, 3], self.end[seg, :3, 3]
+        out = np.empty(seg.shape[0])
+        on_line, on_arc = self._split(seg)
+        seg_l, p = seg[on_line], points[on_line]
+        a, b = self.start[seg_l, :3, 3], self.end[seg_l, :3, 3]
         ab = b - a
         length2 = np.sum(ab * ab, axis=1)
-        t = np.clip(np.sum((points - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
-        to_line = np.linalg.norm(points - a - t[:, None] * ab, axis=1)
-        centre, radius, _, _, nrm, _ = (g[seg] for g in self._geom)  # type: ignore[attr-defined]
-        d = points - centre
+        t = np.clip(np.sum((p - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
+        out[on_line] = np.linalg.norm(p - a - t[:, None] * ab, axis=1)
+        seg_c, p = seg[on_arc], points[on_arc]
+        centre, radius, _, _, nrm, _ = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        d = p - centre
         h = np.sum(d * nrm, axis=1)
         r = np.linalg.norm(d - h[:, None] * nrm, axis=1)
-        to_circle = np.hypot(r - radius, h)
-        return np.where(self._arc[seg], to_circle, to_line)  # type: ignore[attr-defined]
+        out[on_arc] = np.hypot(r - radius, h)
+        return out
 
 
 #: predicted TCP positions (K,3) in the segments' frames for commanded joints (K,6)
@@ -254,9 +286,9 @@ def interval_deviation(
         return _sampled(curves, seg, qc0, qc1, predict, SAMPLE_FRACTIONS)
     dev = _sampled(curves, seg, qc0, qc1, predict, SCREEN_FRACTIONS)
     suspect = np.flatnonzero(dev > screen)
-    if suspect.size:
+    if suspect.size:  # the screen's fractions are among the samples: not again
         dev[suspect] = np.maximum(dev[suspect], _sampled(
-            curves, seg[suspect], qc0[suspect], qc1[suspect], predict, SAMPLE_FRACTIONS))
+            curves, seg[suspect], qc0[suspect], qc1[suspect], predict, _SAMPLES_LEFT))
     return dev
 
 

@@ -82,11 +82,9 @@ def plan_program(program: Program, comp: Compensator, emit: str, *,
             label = operand_label(site.targets, t.operand[row])
             site.reason = label + solved.reason[row]
     # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
-    mode: dict[int, str] = {}
-    for i, site in enumerate(sites):
-        if site.reason is None:
-            joint = emit == "jointtargets" and site.kind in "LJC"
-            mode[i] = "joint" if joint else "filtered"
+    joint_kinds = "LJC" if emit == "jointtargets" else ""
+    mode = {i: "joint" if site.kind in joint_kinds else "filtered"
+            for i, site in enumerate(sites) if site.reason is None}
     return ProgramPlan(sites, targets, conditions, solved, mode, approach_dir, margin)
 
 

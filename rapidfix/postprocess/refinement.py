@@ -13,12 +13,12 @@ here edits text.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 
 from rapidfix.error_model import Context, ErrorModel
 from rapidfix.kinematics import RobotModel
-from rapidfix.postprocess.chain import predecessors
 from rapidfix.postprocess.conditions import arrival_directions
 from rapidfix.postprocess.path import (
     Curves,
@@ -59,22 +59,24 @@ class PathRefinement:
     context: Context | None = None
     direction: np.ndarray | None = None
 
+    @cached_property
     def _kept(self) -> np.ndarray:
-        """Per segment: whether its move is still emitted as a joint move."""
+        """Per segment: whether its move is still emitted as a joint move (worked out
+        once: `mode` is not changed after refinement)."""
         return np.array([self.mode.get(i) == "joint" for i in self.sites], dtype=bool)
 
     def points_added(self) -> int:
         """How many intermediate points the rewrite inserts."""
         if self.points is None:
             return 0
-        return int(np.isin(self.points.seg, np.flatnonzero(self._kept())).sum())
+        return int(np.isin(self.points.seg, np.flatnonzero(self._kept)).sum())
 
     def worst_path_mm(self) -> float | None:
         """The largest predicted deviation (mm) from a line or arc of the moves kept as
         joint moves; None when there are none."""
         if self.points is None:
             return None
-        keep = self._kept()
+        keep = self._kept
         return float(self.points.deviation[keep].max()) if keep.any() else None
 
     def intermediates(self) -> dict[int, tuple[int, int]]:
@@ -140,16 +142,24 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
         return PathRefinement(planned.solved, mode, filtered_reason, [])
     sites, motions = planned.sites, program.motions
     n = len(sites)
-    site_motion = np.fromiter((site.index for site in sites), dtype=np.int64, count=n)
+    t, p = planned.targets, planned.solved
+    site_motion = planned.conditions.site_motion
     site_of_motion = np.full(len(motions) + 1, -1, dtype=np.int64)  # [-1]: no motion
     site_of_motion[site_motion] = np.arange(n)
     compensated = np.zeros(n, dtype=bool)
-    compensated[list(mode)] = True
-    last_row = np.fromiter((site.rows[-1] if site.rows else -1 for site in sites),
-                           dtype=np.int64, count=n)
-    moves = np.array(sorted(i for i, m in mode.items()
-                            if m == "joint" and sites[i].kind in "LC"), dtype=np.int64)
-    previous = np.asarray(predecessors(program), dtype=np.int64)[site_motion[moves]]
+    compensated[np.fromiter(mode, dtype=np.int64, count=len(mode))] = True
+    # each site's first and last target row (-1: none); rows come in site order
+    owner = np.asarray(t.site, dtype=np.int64)
+    first_of = np.flatnonzero(np.diff(owner, prepend=-1))
+    first_row = np.full(n, -1, dtype=np.int64)
+    last_row = np.full(n, -1, dtype=np.int64)
+    first_row[owner[first_of]] = first_of
+    last_row[owner[first_of]] = np.append(first_of[1:], owner.size) - 1
+    kind = planned.conditions.site_kind
+    joint = np.zeros(n, dtype=bool)
+    joint[[i for i, m in mode.items() if m == "joint"]] = True
+    moves = np.flatnonzero(joint & ((kind == "L") | (kind == "C")))
+    previous = planned.conditions.predecessors()[site_motion[moves]]
     after = site_of_motion[previous]  # the site of the motion before, or -1
     # a move after another compensated site starts where that one ends; one after an
     # instruction that is not a site (a MoveAbsJ) may start at its joints
@@ -164,17 +174,16 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     for i in moves[~keep].tolist():
         mode[i] = "filtered"
         filtered_reason[i] = START_UNKNOWN
-    segs = moves[keep].tolist()
+    seg_sites = moves[keep]
+    segs = seg_sites.tolist()
     from_row = start_rows[keep]
-    absj = {k: starts[i] for k, i in enumerate(segs) if i in starts}
+    # segment -> the joints of the MoveAbsJ it follows (segments are in site order)
+    at = np.searchsorted(seg_sites, np.fromiter(starts, dtype=np.int64, count=len(starts)))
+    absj = {int(k): starts[i] for k, i in sorted(zip(at.tolist(), starts))}
     if not segs:
         return PathRefinement(planned.solved, mode, filtered_reason, segs)
-    to_rows = [sites[i].rows[-1] for i in segs]
-    via_rows = [sites[i].rows[0] for i in segs]
-    circular_sites = [sites[i].kind == "C" for i in segs]
-    t, p = planned.targets, planned.solved
-    to_row, via_row = np.array(to_rows), np.array(via_rows)
-    circular = np.array(circular_sites, dtype=bool)
+    to_row, via_row = last_row[seg_sites], first_row[seg_sites]
+    circular = kind[seg_sites] == "C"
     q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
     start_flange = p.flange[from_row]  # the previous target's intended tool0 pose
     if absj:

@@ -253,17 +253,24 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
     """Sites for every robtarget motion instruction, and the rows of the usable targets.
 
     One cheap pass over the instructions: what depends only on an instruction's
-    name, or only on its tool / work object / load operands, is worked out once
-    per distinct name or operand set, and the numbers become arrays in one go.
+    name, or only on its tool / work object / load operands (motions that share
+    those operands share one answer), is worked out once per distinct name or
+    operand set, and the numbers become arrays in one go. A site of one target
+    written in the program (the usual move) costs a few attribute reads here; its
+    orientation is checked with all the others on the arrays.
     """
     sites: list[Site] = []
     values: list[tuple] = []
     operands: list[Operand] = []
-    blocks: list[tuple[int, int, int]] = []  # per compensated site: (site, rows, frame set)
+    row_site: list[int] = []  # per row: its site and its frame set
+    row_set: list[int] = []
     frames = _FrameCache(outside)
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
-    by_tail: dict[Any, tuple[str | None, tuple]] = {}
+    # per shared tail: [why MoveAbsJ cannot take an option, frame key, frame set or None]
+    by_tail: dict[Any, list] = {}
+    joint = emit == "jointtargets"
+    deferred = False  # rows whose quaternion is checked on the arrays
     for index, motion in enumerate(program.motions):
         info = kinds.get(motion.name)
         if info is None:
@@ -278,24 +285,39 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         shared = motion.shared
         around = by_tail.get(shared) if shared is not None else None
         if around is None:
-            around = _around_targets(motion)
+            around = [*_around_targets(motion), None]
             if shared is not None:
                 by_tail[shared] = around
-        option_reason, key = around
-        if reason is None and emit == "jointtargets":
-            reason = option_reason
-        site = Site(motion, kind, site_ops, reason=reason, index=index)
-        sites.append(site)
+        if reason is None and joint:
+            reason = around[0]
         if reason is not None:
+            sites.append(Site(motion, kind, site_ops, [], reason, index))
             continue
+        known = around[2]
+        if known is None:
+            known = frame_sets.get(around[1])
+            if known is None:
+                known = frame_sets[around[1]] = (_site_frames(motion, frames), len(frame_sets))
+            around[2] = known
+        used, set_index = known
+        if len(site_ops) == 1 and not isinstance(used, str):
+            operand = site_ops[0]
+            if operand.static and operand.value is not None \
+                    and operand.type_name == "robtarget":
+                row = len(values)
+                row_site.append(len(sites))
+                sites.append(Site(motion, kind, site_ops, [row], None, index))
+                values.append(operand.value)  # the raw tuple, shape-checked by the RAPID layer
+                operands.append(operand)
+                row_set.append(set_index)
+                deferred = True
+                continue
+        site = Site(motion, kind, site_ops, [], None, index)
+        sites.append(site)
         found = _site_values(site_ops, outside)
         if isinstance(found, str):
             site.reason = found
             continue
-        known = frame_sets.get(key)
-        if known is None:
-            known = frame_sets[key] = (_site_frames(motion, frames), len(frame_sets))
-        used, index = known
         if isinstance(used, str):
             site.reason = used
             continue
@@ -303,14 +325,69 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         site.rows = [first] if len(found) == 1 else list(range(first, first + len(found)))
         values.extend(found)
         operands.extend(site_ops)
-        blocks.append((len(sites) - 1, len(found), index))
+        row_site.extend([len(sites) - 1] * len(found))
+        row_set.extend([set_index] * len(found))
     sets = [used for used, _ in frame_sets.values()]  # by index: insertion order
-    return sites, _arrays(values, operands, blocks, sets)
+    flat = _flat_values(values)
+    if deferred and flat is not None:
+        zero = _zero_quaternions(flat)
+        if zero.any():
+            keep = ~zero
+            _drop_rows(sites, row_site, zero)
+            rows = np.flatnonzero(keep).tolist()
+            values = [values[r] for r in rows]
+            operands = [operands[r] for r in rows]
+            row_site = [row_site[r] for r in rows]
+            row_set = [row_set[r] for r in rows]
+            flat = flat[keep]
+    return sites, _arrays(values, operands, (row_site, row_set), sets, flat)
 
 
-def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int, int, int]],
-            sets: list[_Frames | str]) -> Targets:
-    """The rows as arrays: raw robtarget values, and per block of rows its frame set."""
+#: numbers of a robtarget value: position 3, quaternion 4, confdata 4, external axes 6
+_WIDTHS = (3, 4, 4, 6)
+_ROW = sum(_WIDTHS)
+
+
+def _flat_values(values: list[tuple]) -> np.ndarray | None:
+    """The raw robtarget values (shape-checked by the RAPID layer) as one (N, 17) array
+    in one pass, or None when their numbers do not add up (then `_arrays` takes them
+    column by column and fails)."""
+    numbers = chain.from_iterable(chain.from_iterable(values))
+    try:
+        flat = np.fromiter(numbers, dtype=float, count=_ROW * len(values))
+    except ValueError:  # fewer numbers
+        return None
+    if next(numbers, None) is not None:  # more numbers
+        return None
+    return flat.reshape(len(values), _ROW)
+
+
+def _zero_quaternions(flat: np.ndarray) -> np.ndarray:
+    """(N,) rows whose orientation quaternion is zero (the test `_site_values` makes)."""
+    q = flat[:, 3:7]
+    return q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3] < 1e-12
+
+
+def _drop_rows(sites: list[Site], row_site: list[int], zero: np.ndarray) -> None:
+    """The sites of one target whose quaternion is zero (rare) get that reason and no
+    rows; the rows of the others move up."""
+    new_row = np.cumsum(~zero) - 1
+    for site_index in sorted({row_site[r] for r in np.flatnonzero(zero).tolist()}):
+        site = sites[site_index]  # only one-target sites are checked on the arrays
+        site.reason = operand_label(site.targets, site.targets[0]) \
+            + "orientation quaternion is zero"
+        site.rows = []
+    first = int(np.argmax(zero))
+    for site_index in sorted(set(row_site[first:])):
+        site = sites[site_index]
+        site.rows = [int(new_row[r]) for r in site.rows]
+
+
+def _arrays(values: list[tuple], operands: list[Operand],
+            rows: tuple[list[int], list[int]], sets: list[_Frames | str],
+            flat: np.ndarray | None = None) -> Targets:
+    """The rows as arrays: raw robtarget values (`flat`, (N, 17), when made already), and
+    per row its site and frame set (`rows`)."""
     if not values:
         return Targets(np.zeros((0, 4, 4)), np.zeros((0, 4), int), np.zeros((0, 6)),
                        Placement.identity(0), np.zeros(0), np.zeros(0, int), [],
@@ -322,10 +399,13 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
         flat = np.fromiter(chain.from_iterable(r[k] for r in values), dtype=float)
         return flat.reshape(n, width)  # a value of another length fails here
 
-    trans, rot, extax = column(0, 3), column(1, 4), column(3, 6)
-    conf = column(2, 4).astype(int)
-    owner, count, which = (np.array(column, dtype=int) for column in zip(*blocks))
-    row_set = np.repeat(which, count)
+    if flat is None:
+        trans, rot, conf, extax = (column(k, w) for k, w in enumerate(_WIDTHS))
+    else:
+        trans, rot, conf, extax = (np.ascontiguousarray(flat[:, a:b])
+                                   for a, b in ((0, 3), (3, 7), (7, 11), (11, 17)))
+    conf = conf.astype(int)
+    owner, row_set = (np.array(column, dtype=int) for column in rows)
     # a stand-in for the frame sets that are reasons (no row uses them)
     usable = [f for f in sets if not isinstance(f, str)]
     chosen = [f if not isinstance(f, str) else usable[0] for f in sets]
@@ -344,7 +424,7 @@ def _arrays(values: list[tuple], operands: list[Operand], blocks: list[tuple[int
     else:
         placement = Placement(tool[row_set], wobj[row_set], stationary[row_set])
     return Targets(pose(trans, rot), conf, extax, placement, mass[row_set],
-                   np.repeat(owner, count), operands, cog[row_set], total[row_set])
+                   owner, operands, cog[row_set], total[row_set])
 
 
 def _poses(frames: list[Any]) -> np.ndarray:

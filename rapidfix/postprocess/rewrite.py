@@ -317,8 +317,14 @@ def rewrite_source(
     """Compensate one program given as bytes; returns the new bytes and what was done."""
     with cyclic_gc_paused():
         program = parse_program(data, filename)
-        with _kernels_for(len(program.motions)):
-            return _rewrite(program, data, filename, comp, options)
+        moves = len(program.motions)
+        # _rewrite holds the only reference, so the program model is freed where it lets
+        # it go (before the read-back), not after the collector is back on: then its
+        # first collection would walk every object of the model once more
+        handed = [program]
+        del program
+        with _kernels_for(moves):
+            return _rewrite(handed, data, filename, comp, options)
 
 
 @contextmanager
@@ -336,8 +342,10 @@ def _kernels_for(moves: int) -> Iterator[None]:
         yield
 
 
-def _rewrite(program: Program, data: bytes, filename: str, comp: Compensator,
+def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensator,
              options: RewriteOptions) -> RewriteResult:
+    """The steps after parsing; `handed` holds the program model, taken out here."""
+    program = handed.pop()
     old = read_header(program.text)
     if old is not None and not options.force:
         raise RapidSemanticError(

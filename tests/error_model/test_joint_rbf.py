@@ -1,5 +1,6 @@
 """The per-joint RBF network: cross-validated width, derivative, valid-range policy."""
 
+import contextlib
 import functools
 import warnings
 
@@ -146,3 +147,41 @@ def _numpy_value(net, x):
     k = net.centres.shape[0]
     g = np.exp(-0.5 * np.square(np.subtract.outer(x, net.centres) * (1.0 / net.width)))
     return g @ net.weights[:k] + net.weights[k] + net.weights[k + 1] * net._u(x)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("spacing", ["even", "uneven"])
+def test_value_and_derivative_at_once_are_each_on_its_own(compiled, spacing):
+    """The Newton step takes Δθ and its slope at the same joints from one pass
+    (`delta_and_derivative`): the very numbers of the two separate calls, compiled or
+    not, with joints outside the range (clamped: slope 0, one warning) and without a
+    network."""
+    from rapidfix.error_model import ErrorModel
+    from rapidfix.error_model.joint_rbf import RBFNetwork, compiled_sums
+
+    rng = np.random.default_rng(11)
+    centres = np.linspace(-2.5, 2.8, 90)
+    if spacing == "uneven":
+        centres = centres + rng.uniform(-1e-3, 1e-3, centres.size) * (centres[1] - centres[0])
+    nets = []
+    for factor in (0.7, 4.0, 13.0, None, 2.0, 1.0):
+        net = None
+        if factor is not None:
+            net = RBFNetwork(centres, factor * (centres[1] - centres[0]), -2.5, 2.8, 1e-4)
+            net.weights = rng.normal(size=net.n_params) * 1e-3
+        nets.append(net)
+    eff = JointRBF(nets)
+    model = ErrorModel("IRB1600-10/1.45", [eff])
+    q = rng.uniform(-2.9, 3.1, (500, 6))  # some outside [-2.5, 2.8]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OutsideRangeWarning)
+        with compiled_sums() if compiled else contextlib.nullcontext():
+            both = model.delta_and_derivative(q)
+            eff.reset_warnings()
+            apart = model.delta(q), model.delta_derivative(q)
+    assert np.array_equal(both[0], apart[0])
+    assert np.array_equal(both[1], apart[1])
+    outside = (q < -2.5) | (q > 2.8)
+    assert outside[:, 0].any() and np.all(both[1][outside[:, 0], 0] == 0.0)
+    assert np.all(both[0][:, 3] == 0.0) and np.all(both[1][:, 3] == 0.0)
+    assert np.any(both[1][~outside[:, 0], 0] != 0.0)

@@ -152,3 +152,26 @@ def test_large_batches_go_through_in_chunks_with_the_same_answers(monkeypatch):
     assert {IKStatus.OK, IKStatus.UNREACHABLE} <= set(status_c.tolist())
     ok = status_c == IKStatus.OK
     assert np.allclose(robot.fk(q_c[ok]), poses[ok], atol=1e-8)
+
+
+@pytest.mark.parametrize(("name", "variant", "seed"),
+                         [c for c in CASES if c[1] != "actual"])
+def test_compiled_choice_is_the_numpy_choice(name, variant, seed):
+    """Where the IK's closed form is compiled, the choice is compiled too
+    (`conf_compiled`): the same slot and status as the numpy route, boundaries included."""
+    import dataclasses
+
+    from rapidfix.compiled import load_kernel
+
+    assert load_kernel("rapidfix.kinematics.conf_compiled") is not None
+    robot = load_robot(name)
+    rng = np.random.default_rng(seed + 2000)
+    robot = {"nominal": robot, "wide": wide(robot)}[variant]
+    T, conf = awkward_targets(robot, rng, 600)
+    sols = robot.ik(T)
+    assert sols.backend == "numba"
+    got_q, got_status = select_by_conf(robot, sols, conf)
+    want_q, want_status = select_by_conf(robot, dataclasses.replace(sols, backend="numpy"), conf)
+    assert np.array_equal(got_status, want_status)
+    assert np.array_equal(np.isnan(got_q), np.isnan(want_q))
+    assert np.array_equal(np.nan_to_num(got_q), np.nan_to_num(want_q))

@@ -1,6 +1,7 @@
 """How the program runs: gripped loads in execution order, arrival directions along chains."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -135,6 +136,14 @@ def test_configuration_monitoring_follows_the_execution_order():
     assert state["p7"] == "off"
     assert state["p9"] == "unknown"  # not called from main: not known ...
     assert state["p10"] == "off"  # ... until the routine itself switches it
+
+
+@pytest.mark.parametrize("word", ["ConfL", "CONFL", "confl", "cOnFl", "coNfL", "CoNFl"])
+def test_the_switch_is_found_in_any_case(word):
+    text = MONITORING.replace("ConfL \\Off;\n    MoveL p2", f"{word} \\Off;\n    MoveL p2")
+    assert word in text
+    off, _ = config_monitoring(parse_program(text.encode(), "cell.mod"))
+    assert off[1] and not off[0]  # p2 after the switch, p1 before it
 
 
 def test_without_conf_statements_monitoring_is_on_everywhere():
