@@ -19,6 +19,10 @@ MAX_IDENTIFIER = 32
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 _BAD = re.compile(r"[^A-Za-z0-9_]+")
 _WORD = re.compile(r"[a-z0-9_]*")
+# Stems joined by newlines, each an identifier that needs no cleaning: a letter first,
+# no '_' at either end (what `allocate` would strip)
+_PLAIN_STEMS = re.compile(r"[A-Za-z](?:[A-Za-z0-9_]*[A-Za-z0-9])?"
+                          r"(?:\n[A-Za-z](?:[A-Za-z0-9_]*[A-Za-z0-9])?)*")
 
 
 def identifiers_in(text: str) -> set[str]:
@@ -112,15 +116,19 @@ class NameAllocator:
     def allocate_many(self, stems: list[str], prefix: str = "jt_") -> list[str]:
         """`allocate` for each stem in turn, at list speed in the usual case (every stem a
         plain identifier, every name new and distinct), one by one otherwise."""
-        simple = (prefix[:1].isalpha() and prefix.isascii()
-                  and all(s.isascii() and s.isidentifier() and s[0] != "_" and s[-1] != "_"
-                          and len(s) + len(prefix) <= MAX_IDENTIFIER for s in stems))
-        if simple and stems:
+        if not stems:
+            return []
+        joined = "\n".join(stems)
+        simple = (prefix[:1].isalpha() and prefix.isascii() and joined.isascii()
+                  and joined.count("\n") == len(stems) - 1
+                  and _PLAIN_STEMS.fullmatch(joined) is not None
+                  and max(map(len, stems)) + len(prefix) <= MAX_IDENTIFIER)
+        if simple:
             head = prefix[:16].lower()
             if head not in self._heads:
                 self._scan(head)
             names = [prefix + s for s in stems]
-            keys = [name.lower() for name in names]
+            keys = (prefix + joined.replace("\n", "\n" + prefix)).lower().split("\n")
             if len(set(keys)) == len(keys) and self._taken.isdisjoint(keys):
                 self._taken.update(keys)
                 return names

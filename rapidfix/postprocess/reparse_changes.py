@@ -16,6 +16,7 @@ jointtarget and the MoveAbsJ that names it sit in the same check module).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import groupby
 
 from rapidfix.rapid import MotionInstruction, Program, parse_program
 
@@ -43,6 +44,24 @@ class CheckUnits:
         self._count += 1
         self._statements.setdefault((module, routine), []).append((ident, text))
         return ident
+
+    def add_declarations(self, module: str, routine: str | None, texts: list[str]) -> None:
+        """`add_declaration` for many declarations of one scope, in order."""
+        self._decls.setdefault((module, routine), []).extend(texts)
+
+    def add_statements(self, modules: list[str], routines: list[str],
+                       texts: list[str]) -> range:
+        """`add_statement` for many statements (module and routine of each); their ids."""
+        first = self._count
+        self._count += len(texts)
+        statements = self._statements
+        pos = first
+        for key, run in groupby(zip(modules, routines)):
+            size = len(list(run))
+            statements.setdefault(key, []).extend(
+                zip(range(pos, pos + size), texts[pos - first:pos - first + size]))
+            pos += size
+        return range(first, self._count)
 
     @property
     def statement_count(self) -> int:

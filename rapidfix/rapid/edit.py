@@ -55,7 +55,8 @@ class Editor:
         if not starts:
             return
         size = len(self.program.text)
-        if min(starts) < 0 or max(ends) > size or any(a > b for a, b in zip(starts, ends)):
+        if min(starts) < 0 or max(ends) > size or (
+                np.asarray(starts, dtype=np.int64) > np.asarray(ends, dtype=np.int64)).any():
             raise ValueError("a span is outside the program text")
         n = len(self._edits)
         self._edits.extend(map(Edit, starts, ends, texts, range(n, n + len(starts))))
@@ -108,6 +109,14 @@ class Editor:
             positions.append(end)
             bodies.append(body)
         self.replace_many(positions, positions, bodies)
+
+    def line_numbers(self, offsets: Sequence[int]) -> list[int]:
+        """1-based line of each character offset of the program text (one search for all)."""
+        source = self.program.source
+        source.line_start(0)  # makes the line table
+        starts = np.asarray(source._line_starts)
+        return np.searchsorted(starts, np.asarray(offsets, dtype=np.int64),
+                               side="right").tolist()
 
     # ------------------------------------------------------------ conveniences
     def replace_statement(self, motion: MotionInstruction, text: str) -> None:

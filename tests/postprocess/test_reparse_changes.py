@@ -156,23 +156,15 @@ def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, com
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-class _NoPointsButTheLoop(dict):
-    """No intermediate points, yet truthy: the rewrite takes its move-by-move loop."""
-
-    def __bool__(self):
-        return True
-
-
 @pytest.mark.parametrize("name", [*PROGRAMS, "cam"])
-def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypatch, comp, name):
+def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name):
     data = cam_program(200).encode() if name == "cam" else (SAMPLES / name).read_bytes()
-    phased = rewrite_source(data, name, comp, RewriteOptions())
-    monkeypatch.setattr(emission_module._Emitter, "_intermediates",
-                        lambda self: _NoPointsButTheLoop())
-    looped = rewrite_source(data, name, comp, RewriteOptions())
-    if phased.points_added == 0:
-        assert phased.data == looped.data
-    assert looped.moves_compensated == phased.moves_compensated
+    columns = rewrite_source(data, name, comp, RewriteOptions())
+    monkeypatch.setattr(emission_module._Emitter, "_columns", False)
+    one_by_one = rewrite_source(data, name, comp, RewriteOptions())
+    assert columns.data == one_by_one.data
+    assert one_by_one.moves_compensated == columns.moves_compensated
+    assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm
 
 
 def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_route():
