@@ -32,7 +32,7 @@ from rapidfix.postprocess.naming import NameAllocator, count_identifiers
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.planning import ProgramPlan
 from rapidfix.postprocess.refinement import PathRefinement
-from rapidfix.postprocess.reparse_changes import CheckUnits
+from rapidfix.postprocess.reparse_changes import CheckUnits, JointSlot
 from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
 from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
@@ -40,6 +40,9 @@ from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_d
 #: optional arguments left off the intermediate points of a subdivided move
 INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
 INTERMEDIATE_ZONE = "z0"
+# where a name goes in a statement made once for several names (a program text with a
+# NUL, which the reader refuses in a file, takes the statements one by one)
+_NAME_MARK = "\x00"
 
 
 @dataclass(frozen=True)
@@ -229,7 +232,7 @@ class _Emitter:
                          if approach is not None else None)
         add_statement = self.units.add_statement
         if inter is not None or approach is not None:  # points inserted before the move
-            lines, variants = self._points_before(site, inter, inter_names, approach_name)
+            lines, variants, _ = self._points_before(site, inter, inter_names, approach_name)
             for j, variant in enumerate(variants):
                 ident = add_statement(motion.module, motion.routine, variant)
                 self.inter_checks.append((ident, segment, inter[0] + j))
@@ -299,19 +302,21 @@ class _Emitter:
                 heads[n] = (text[starts[n] + len(syntaxes[n].name):targets[0].argument.start]
                             + text[targets[1].argument.start:values[n].start])
         tails = [text[value.end:end] for value, end in zip(values, ends)]
-        statements = [f"MoveAbsJ{head}{name}{tail}"
-                      for head, name, tail in zip(heads, dest_names, tails)]
+        heads = ["MoveAbsJ" + head for head in heads]
+        statements = list(map("".join, zip(heads, dest_names, tails)))
+        slots = list(zip(heads, dest_names, tails))
         modules = [motion.module for motion in motions]
         routines = [motion.routine for motion in motions]
         rows = [site.rows[-1] for site in sites]
         if not extras:
             self.editor.replace_many(starts, ends, statements)
-            idents = self.units.add_statements(modules, routines, statements)
+            idents = self.units.add_statements(modules, routines, statements, slots)
             self.checks.extend(zip(idents, repeat(0), rows))
             return
         # the statements in the order of the move-by-move route: a move's inserted
         # points, then the move
         all_texts: list[str] = []
+        all_slots: list[JointSlot | None] = []
         all_modules: list[str] = []
         all_routines: list[str] = []
         main_at: list[int] = []
@@ -320,10 +325,11 @@ class _Emitter:
         for k, (span, points, approach, segment) in extras.items():
             main_at.extend(range(len(all_texts), len(all_texts) + k - done))
             all_texts += statements[done:k]
+            all_slots += slots[done:k]
             all_modules += modules[done:k]
             all_routines += routines[done:k]
             first = extra_at[k]
-            lines, variants = self._points_before(
+            lines, variants, variant_slots = self._points_before(
                 sites[k], span, names[first:first + len(points)],
                 names[first + len(points)] if approach is not None else None)
             for j, variant in enumerate(variants):
@@ -331,19 +337,22 @@ class _Emitter:
                 all_texts.append(variant)
                 all_modules.append(modules[k])
                 all_routines.append(routines[k])
+            all_slots += variant_slots
             if lines:
                 self.editor.insert(starts[k], "".join(lines))
             main_at.append(len(all_texts))
             all_texts.append(statements[k])
+            all_slots.append(slots[k])
             all_modules.append(modules[k])
             all_routines.append(routines[k])
             done = k + 1
         main_at.extend(range(len(all_texts), len(all_texts) + len(sites) - done))
         all_texts += statements[done:]
+        all_slots += slots[done:]
         all_modules += modules[done:]
         all_routines += routines[done:]
         self.editor.replace_many(starts, ends, statements)
-        idents = self.units.add_statements(all_modules, all_routines, all_texts)
+        idents = self.units.add_statements(all_modules, all_routines, all_texts, all_slots)
         self.checks.extend(zip([idents[n] for n in main_at], repeat(0), rows))
         self.inter_checks.extend((idents[n], segment, row) for n, segment, row in inter_at)
 
@@ -373,10 +382,12 @@ class _Emitter:
         return name_at
 
     def _points_before(self, site: Site, inter: tuple[int, int] | None, inter_names: list[str],
-                       approach_name: str | None) -> tuple[list[str], list[str]]:
+                       approach_name: str | None
+                       ) -> tuple[list[str], list[str], list[JointSlot | None]]:
         """The statements inserted before a move, to its intermediate points (`inter`:
         their rows in the refinement) and its approach point: (the lines to insert, the
-        intermediate points' statements)."""
+        intermediate points' statements, their JointSlots — None in the move-by-move
+        route, which makes each statement from its edits)."""
         motion = site.motion
         indent = indent_before(self.program, motion.syntax.start)
         sep = "\n" + indent if indent is not None else " "
@@ -384,22 +395,29 @@ class _Emitter:
                  for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
         lines: list[str] = []
         variants: list[str] = []
+        slots: list[JointSlot | None] = []
         if inter is not None:
             zone = motion.zone
             zone_value = zone.argument.value if zone is not None else None
             zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
                          if zone_value is not None else [])
-            for sub in inter_names:
-                self.inserted.add(sub)
-                variant = statement_variant(
-                    self.program, motion, joint_edits(site, sub) + drops + zone_edit)
-                lines.append(variant + sep)
-                variants.append(variant)
+            self.inserted.update(inter_names)
+            parts = statement_variant(self.program, motion, joint_edits(
+                site, _NAME_MARK) + drops + zone_edit).split(_NAME_MARK) if self._columns else []
+            if len(parts) == 2:  # one statement with a mark where the name goes
+                slots = [(parts[0], sub, parts[1]) for sub in inter_names]
+                variants = list(map("".join, slots))
+            else:
+                variants = [statement_variant(self.program, motion,
+                                              joint_edits(site, sub) + drops + zone_edit)
+                            for sub in inter_names]
+                slots = [None] * len(variants)
+            lines = [variant + sep for variant in variants]
         if approach_name is not None:  # stands still there (fine), then arrives from one side
             self.inserted.add(approach_name)
             lines.append(statement_variant(self.program, motion,
                                             joint_edits(site, approach_name) + drops) + sep)
-        return lines, variants
+        return lines, variants, slots
 
     def _stems(self, motions: list[MotionInstruction], operands: list[Operand]) -> list[str]:
         """`_stem` of many targets: a name where the target has one, else the
@@ -455,13 +473,13 @@ class _Emitter:
 
     def _extend_block(self, anchor: Any, target: Any, where: tuple[str, str | None],
                       texts: list[str]) -> None:
-        """Queue declarations at one anchor (`_add_declaration`'s second half)."""
+        """Queue jointtarget declarations at one anchor (`_add_declaration`'s second half)."""
         block = self.decl_blocks.get(anchor)
         if block is None:
             block = self.decl_blocks[anchor] = []
             self.decl_anchor_order.append((anchor, target))
         block.extend(texts)
-        self.units.add_declarations(*where, texts)
+        self.units.add_jointtarget_declarations(*where, texts)
 
     def _filtered(self, filtered_sites: list[int]) -> None:
         """Filtered robtargets: in the declaration when only compensated moves use it,
@@ -539,6 +557,7 @@ class _Emitter:
         ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
         placement = t.placement.take(rows)
         tcp, context = t.pose[rows], self.solved.context.take(rows)
+        joints = self.solved.q_cmd[rows]  # as written where a jointtarget is
         if self.inter_checks:
             inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
             frames = self.refined.frames.take(seg)
@@ -548,11 +567,12 @@ class _Emitter:
             ids = np.concatenate([ids, inter_ids])
             slots = np.concatenate([slots, np.zeros(len(seg), int)])
             tcp = np.concatenate([tcp, self.refined.points.pose[index]])
+            joints = np.concatenate([joints, self.refined.points.q_cmd[index]])
             inter = self.refined.context.take(seg)
             if self.refined.direction is not None:
                 inter = replace(inter, last_direction=self.refined.direction[index])
             context = Context.concatenate(context, inter)
-        return Expected(ids, slots, tcp, placement, context)
+        return Expected(ids, slots, tcp, placement, context, joints)
 
 
 
