@@ -17,6 +17,7 @@ from collections.abc import Iterable
 MAX_IDENTIFIER = 32
 #: an identifier-shaped word of RAPID text (keywords included)
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_LOWER_IDENTIFIER = re.compile(r"[a-z][a-z0-9_]*")
 _BAD = re.compile(r"[^A-Za-z0-9_]+")
 _WORD = re.compile(r"[a-z0-9_]*")
 # Stems joined by newlines, each an identifier that needs no cleaning: a letter first,
@@ -34,6 +35,8 @@ def identifiers_in(text: str) -> set[str]:
 
 def identifier_counts(text: str) -> Counter[str]:
     """How often each identifier-shaped word occurs in a RAPID text, lower-cased."""
+    if text.isascii():  # lower-casing first is quicker and, for ASCII, the same
+        return Counter(_LOWER_IDENTIFIER.findall(text.lower()))
     return Counter(map(str.lower, IDENTIFIER.findall(text)))
 
 
@@ -115,7 +118,8 @@ class NameAllocator:
 
     def allocate_many(self, stems: list[str], prefix: str = "jt_") -> list[str]:
         """`allocate` for each stem in turn, at list speed in the usual case (every stem a
-        plain identifier, every name new and distinct), one by one otherwise."""
+        plain identifier, every name new and distinct once a stem used k times takes the
+        suffix `_k`), one by one otherwise."""
         if not stems:
             return []
         joined = "\n".join(stems)
@@ -129,6 +133,16 @@ class NameAllocator:
                 self._scan(head)
             names = [prefix + s for s in stems]
             keys = (prefix + joined.replace("\n", "\n" + prefix)).lower().split("\n")
+            if len(set(keys)) < len(keys):
+                # the k-th use of a name (case-insensitively) gets `_k`, as `allocate`
+                # gives it when no other name is in the way (checked below)
+                uses: dict[str, int] = {}
+                for n, key in enumerate(keys):
+                    k = uses[key] = uses.get(key, 0) + 1
+                    if k > 1:
+                        suffix = f"_{k}"
+                        names[n] = names[n][: MAX_IDENTIFIER - len(suffix)] + suffix
+                keys = [name.lower() for name in names]
             if len(set(keys)) == len(keys) and self._taken.isdisjoint(keys):
                 self._taken.update(keys)
                 return names
