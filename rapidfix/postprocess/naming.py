@@ -117,9 +117,9 @@ class NameAllocator:
         return key not in self._taken
 
     def allocate_many(self, stems: list[str], prefix: str = "jt_") -> list[str]:
-        """`allocate` for each stem in turn, at list speed in the usual case (every stem a
-        plain identifier, every name new and distinct once a stem used k times takes the
-        suffix `_k`), one by one otherwise."""
+        """`allocate` for each stem in turn: at list speed when every stem is a plain
+        identifier and every name new and distinct, by a lean loop when some are not,
+        one by one through `allocate` otherwise."""
         if not stems:
             return []
         joined = "\n".join(stems)
@@ -133,19 +133,25 @@ class NameAllocator:
                 self._scan(head)
             names = [prefix + s for s in stems]
             keys = (prefix + joined.replace("\n", "\n" + prefix)).lower().split("\n")
-            if len(set(keys)) < len(keys):
-                # the k-th use of a name (case-insensitively) gets `_k`, as `allocate`
-                # gives it when no other name is in the way (checked below)
-                uses: dict[str, int] = {}
-                for n, key in enumerate(keys):
-                    k = uses[key] = uses.get(key, 0) + 1
-                    if k > 1:
-                        suffix = f"_{k}"
-                        names[n] = names[n][: MAX_IDENTIFIER - len(suffix)] + suffix
-                keys = [name.lower() for name in names]
-            if len(set(keys)) == len(keys) and self._taken.isdisjoint(keys):
-                self._taken.update(keys)
+            taken = self._taken
+            if len(set(keys)) == len(keys) and taken.isdisjoint(keys):
+                taken.update(keys)
                 return names
+            # one by one, as `allocate` does for a stem that needs no cleaning; the
+            # suffixes a name has tried stay taken, so its next use starts after them
+            tried: dict[str, int] = {}
+            for n, key in enumerate(keys):
+                if key in taken:
+                    base, counter, candidate = names[n], tried.get(key, 1), key
+                    while candidate in taken:
+                        counter += 1
+                        suffix = f"_{counter}"
+                        names[n] = base[: MAX_IDENTIFIER - len(suffix)] + suffix
+                        candidate = names[n].lower()
+                    tried[key] = counter
+                    key = candidate
+                taken.add(key)
+            return names
         return [self.allocate(s, prefix) for s in stems]
 
     def allocate(self, stem: str, prefix: str = "jt_") -> str:
