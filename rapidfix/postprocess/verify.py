@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from itertools import repeat
+from operator import is_not, itemgetter
 
 import numpy as np
 
@@ -134,7 +136,7 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
     k = expected.motion.shape[0]
     if not k or not any(slots):
         return None
-    is_joint = np.fromiter((slot is not None for slot in slots), bool, len(slots))
+    is_joint = np.fromiter(map(is_not, slots, repeat(None)), bool, len(slots))
     joint_rows = is_joint[expected.motion]
     if expected.slot[joint_rows].any():
         return None
@@ -181,7 +183,7 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
             return None
         where[joint_idents] = found
     if not _templates_move_to_their_name(dict.fromkeys(
-            (slot[0], slot[2]) for slot in slots if slot is not None)):
+            map(itemgetter(0, 2), filter(None, slots)))):
         return None
     # everything else, on its own
     text, order = units.text(others_only=True)
