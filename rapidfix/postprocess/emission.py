@@ -465,10 +465,18 @@ class _Emitter:
                 anchors.append(motion.module.lower())  # among the module's declarations
                 targets.append(module_of[motion.module])
                 wheres.append((motion.module, None))
+        blocks, order, get = self.decl_blocks, self.decl_anchor_order, self.decl_blocks.get
+        for anchor, target, text in zip(anchors, targets, texts):
+            block = get(anchor)
+            if block is None:
+                blocks[anchor] = [text]
+                order.append((anchor, target))
+            else:
+                block.append(text)
         pos = 0
-        for (anchor, where), run in groupby(zip(anchors, wheres)):
+        for where, run in groupby(wheres):  # the check units, by runs of one scope
             size = len(list(run))
-            self._extend_block(anchor, targets[pos], where, texts[pos:pos + size])
+            self.units.add_jointtarget_declarations(*where, texts[pos:pos + size])
             pos += size
 
     def _extend_block(self, anchor: Any, target: Any, where: tuple[str, str | None],
