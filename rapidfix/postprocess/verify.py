@@ -123,8 +123,9 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
     (`read_back` then parses the whole).
 
     - The jointtarget declarations: one regular-expression pass over all of them and one
-      `np.array` (`read_jointtarget_declarations`); a name declared twice in a scope, or
-      also by another new declaration of the module, is a clash and stops the rewrite.
+      conversion of their numbers (`read_jointtarget_declarations`); a name declared
+      twice in a scope, or also by another new declaration of the module (the names
+      are allocated to be new, so that is a bug), is a clash and stops the rewrite.
     - The statements: each distinct text around the name (a CAM program has a few dozen)
       is parsed once, with a name of the same kind in its place, and must be a call
       whose target reads that name's jointtarget; each name is found as RAPID finds it
