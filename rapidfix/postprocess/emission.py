@@ -11,7 +11,9 @@ it reads and writes no file.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, replace
+from itertools import groupby, repeat
 from typing import Any
 
 import numpy as np
@@ -30,14 +32,17 @@ from rapidfix.postprocess.naming import NameAllocator, count_identifiers
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.planning import ProgramPlan
 from rapidfix.postprocess.refinement import PathRefinement
-from rapidfix.postprocess.reparse_changes import CheckUnits
+from rapidfix.postprocess.reparse_changes import CheckUnits, JointSlot
 from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
-from rapidfix.rapid import Editor, Program, format_declaration
+from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
 
 #: optional arguments left off the intermediate points of a subdivided move
 INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
 INTERMEDIATE_ZONE = "z0"
+# where a name goes in a statement made once for several names (a program text with a
+# NUL, which the reader refuses in a file, takes the statements one by one)
+_NAME_MARK = "\x00"
 
 
 @dataclass(frozen=True)
@@ -101,6 +106,8 @@ class _Emitter:
         self.decl_blocks: dict[Any, list[str]] = {}
         self.decl_anchor_order: list[Any] = []
         self.inserted: set[str] = set()
+        #: (stem lower-cased, literal) -> the jointtarget's name: one declaration for both
+        self.jt_names: dict[tuple[str, str], str] = {}
         self.units = CheckUnits()
         # what verification reads back: (statement id, target slot, target row) ...
         self.checks: list[tuple[int, int, int]] = []
@@ -166,18 +173,6 @@ class _Emitter:
         inter_start = len(joint_sites)
         self._filtered(filtered_sites)
 
-        jt_names: dict[tuple[str, str], str] = {}
-        allocate, add_declaration = self.names.allocate, self._add_declaration
-
-        def jointtarget_name(stem: str, literal: str, site: Site) -> str:
-            key = (stem.lower(), literal)
-            name = jt_names.get(key)
-            if name is None:
-                name = jt_names[key] = allocate(stem, "jt_")
-                add_declaration(site, len(site.targets) - 1,
-                                jointtarget_declaration(name, literal))
-            return name
-
         approach = {i: d for i, d in self.planned.approach.items() if mode.get(i) == "joint"}
         approach_literal = {}
         if approach:
@@ -186,85 +181,313 @@ class _Emitter:
             start = p.q_cmd[rows] - np.array(list(approach.values())) * self.planned.approach_margin
             approach_literal = dict(zip(keys, jointtarget_literals(np.degrees(start),
                                                                    t.extax[rows])))
-        if not inter and not approach:
-            self._emit_joints(joint_sites, dest_literal)
+        if not self._columns:  # the reference: move by move
+            for k, i in enumerate(joint_sites):
+                points = (literals[inter_start:inter_start + inter[i][1] - inter[i][0]]
+                          if i in inter else [])
+                inter_start += len(points)
+                self._emit_joint_with_points(i, dest_literal[k], inter.get(i), points,
+                                             approach_literal.get(i), segment_of.get(i))
             self._flush_declarations()
             return self._expected()
-        program_text = self.program.text
-        starts: list[int] = []
-        ends: list[int] = []
-        statements: list[str] = []
-        add_statement = self.units.add_statement
-        for i, literal in zip(joint_sites, dest_literal):
-            site = self.sites[i]
-            motion = site.motion
-            stem = _stem(site, len(site.targets) - 1)
-            name = jointtarget_name(stem, literal, site)
-            lines = []
-            if i in inter or i in approach:  # points inserted before the move
-                indent = indent_before(self.program, motion.syntax.start)
-                sep = "\n" + indent if indent is not None else " "
-                drops = [(op.argument.start, op.argument.end, "")
-                         for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
-            if i in inter:
-                lo, hi = inter[i]
-                zone = motion.zone
-                zone_value = zone.argument.value if zone is not None else None
-                zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
-                             if zone_value is not None else [])
-                for j in range(hi - lo):
-                    sub = jointtarget_name(f"{stem}_{j + 1}", literals[inter_start + j], site)
-                    self.inserted.add(sub)
-                    variant = statement_variant(
-                        self.program, motion, joint_edits(site, sub) + drops + zone_edit)
-                    lines.append(variant + sep)
-                    ident = add_statement(motion.module, motion.routine, variant)
-                    self.inter_checks.append((ident, segment_of[i], lo + j))
-                inter_start += hi - lo
-            if i in approach:  # stands still there (fine), then arrives from one side
-                sub = jointtarget_name(f"{stem}_app", approach_literal[i], site)
-                self.inserted.add(sub)
-                lines.append(statement_variant(self.program, motion,
-                                                joint_edits(site, sub) + drops) + sep)
-            if lines:
-                self.editor.insert(motion.syntax.start, "".join(lines))
-            statement = joint_statement(program_text, site, name)
-            starts.append(motion.syntax.start)
-            ends.append(motion.syntax.end)
-            statements.append(statement)
-            ident = add_statement(motion.module, motion.routine, statement)
-            self.checks.append((ident, 0, site.rows[-1]))
-        self.editor.replace_many(starts, ends, statements)
+        # the points inserted before a move: (its intermediate rows, their literals, its
+        # approach point's literal, its refined segment), by the move's place in joint_sites
+        extras: dict[int, tuple] = {}
+        for k, i in enumerate(joint_sites):
+            if i in inter or i in approach:
+                points = (literals[inter_start:inter_start + inter[i][1] - inter[i][0]]
+                          if i in inter else [])
+                inter_start += len(points)
+                extras[k] = (inter.get(i), points, approach_literal.get(i), segment_of.get(i))
+        self._emit_joints(joint_sites, dest_literal, extras)
         self._flush_declarations()
         return self._expected()
 
-    def _emit_joints(self, joint_sites: list[int], literals: list[str]) -> None:
-        """`emit`'s loop for moves without intermediate points (a CAM program), in phases
-        over all moves: the same names, declarations and statements."""
-        sites = [self.sites[i] for i in joint_sites]
-        stems = [_stem(site, len(site.targets) - 1) for site in sites]
-        keys = list(zip(map(str.lower, stems), literals))
-        first: dict[tuple[str, str], int] = {}
-        for n, key in enumerate(keys):
-            first.setdefault(key, n)
-        order = list(first.values())
-        names = self.names.allocate_many([stems[n] for n in order], "jt_")
-        name_of = dict(zip(first, names))
-        add_declaration = self._add_declaration
-        for n, name in zip(order, names):
-            site = sites[n]
-            add_declaration(site, len(site.targets) - 1,
-                            jointtarget_declaration(name, literals[n]))
+    #: False: every move through `_emit_joint_with_points` (tests compare the two routes)
+    _columns = True
+
+    def _jointtarget_name(self, stem: str, literal: str, site: Site) -> str:
+        """The jointtarget named after `stem` holding `literal`: declared on first use."""
+        key = (stem.lower(), literal)
+        name = self.jt_names.get(key)
+        if name is None:
+            name = self.jt_names[key] = self.names.allocate(stem, "jt_")
+            self._add_declaration(site, len(site.targets) - 1,
+                                  jointtarget_declaration(name, literal))
+        return name
+
+    def _emit_joint_with_points(self, i: int, literal: str, inter: tuple[int, int] | None,
+                                points: list[str], approach: str | None,
+                                segment: int | None) -> None:
+        """One move as MoveAbsJ, with its intermediate (`inter`: their rows in the
+        refinement, `points` their literals) and approach points inserted before it
+        (the reference for `_emit_joints`)."""
+        site = self.sites[i]
+        motion = site.motion
+        stem = _stem(site, len(site.targets) - 1)
+        name = self._jointtarget_name(stem, literal, site)
+        inter_names = [self._jointtarget_name(f"{stem}_{j + 1}", point, site)
+                       for j, point in enumerate(points)]
+        approach_name = (self._jointtarget_name(f"{stem}_app", approach, site)
+                         if approach is not None else None)
+        add_statement = self.units.add_statement
+        if inter is not None or approach is not None:  # points inserted before the move
+            lines, variants, _ = self._points_before(site, inter, inter_names, approach_name)
+            for j, variant in enumerate(variants):
+                ident = add_statement(motion.module, motion.routine, variant)
+                self.inter_checks.append((ident, segment, inter[0] + j))
+            if lines:
+                self.editor.insert(motion.syntax.start, "".join(lines))
+        statement = joint_statement(self.program.text, site, name)
+        self.editor.replace((motion.syntax.start, motion.syntax.end), statement)
+        ident = add_statement(motion.module, motion.routine, statement)
+        self.checks.append((ident, 0, site.rows[-1]))
+
+    def _emit_joints(self, joint_sites: list[int], literals: list[str],
+                     extras: dict[int, tuple]) -> None:
+        """Every move as MoveAbsJ, as columns over all moves (the same names,
+        declarations and statements as `_emit_joint_with_points` move by move, built by
+        list operations instead of several calls per move): the names of all
+        destinations and inserted points in the order the moves use them, their
+        declarations, the statements. `extras` holds the points inserted before a move
+        (see `emit`)."""
+        sites = list(map(self.sites.__getitem__, joint_sites))
+        motions = [site.motion for site in sites]
+        operands = [site.targets[-1] for site in sites]
+        stems = self._stems(motions, operands)
+        # the jointtargets in the order their names are first asked for: each move's
+        # destination, then the points inserted before it
+        if extras:
+            want_stems: list[str] = []
+            want_literals: list[str] = []
+            want_move: list[int] = []
+            dest_at: list[int] = []
+            extra_at: dict[int, int] = {}
+            done = 0
+            for k, (span, points, approach, _segment) in extras.items():
+                dest_at.extend(range(len(want_stems), len(want_stems) + k + 1 - done))
+                want_stems += stems[done:k + 1]
+                want_literals += literals[done:k + 1]
+                want_move += range(done, k + 1)
+                extra_at[k] = len(want_stems)
+                stem = stems[k]
+                if span is not None:
+                    want_stems += [f"{stem}_{j + 1}" for j in range(len(points))]
+                    want_literals += points
+                if approach is not None:
+                    want_stems.append(f"{stem}_app")
+                    want_literals.append(approach)
+                want_move += [k] * (len(want_stems) - len(want_move))
+                done = k + 1
+            dest_at.extend(range(len(want_stems), len(want_stems) + len(sites) - done))
+            want_stems += stems[done:]
+            want_literals += literals[done:]
+            want_move += range(done, len(sites))
+            names = self._jointtarget_names(want_stems, want_literals,
+                                            [motions[k] for k in want_move],
+                                            [operands[k] for k in want_move])
+            dest_names = [names[n] for n in dest_at]
+        else:
+            dest_names = self._jointtarget_names(stems, literals, motions, operands)
         text = self.program.text
-        statements = [joint_statement(text, site, name_of[key])
-                      for site, key in zip(sites, keys)]
-        self.editor.replace_many([site.motion.syntax.start for site in sites],
-                                 [site.motion.syntax.end for site in sites], statements)
-        add_statement, checks = self.units.add_statement, self.checks
-        for site, statement in zip(sites, statements):
-            motion = site.motion
-            checks.append((add_statement(motion.module, motion.routine, statement), 0,
-                           site.rows[-1]))
+        syntaxes = [motion.syntax for motion in motions]
+        starts = [syntax.start for syntax in syntaxes]
+        ends = [syntax.end for syntax in syntaxes]
+        values = [operand.argument.value for operand in operands]
+        heads = [text[start + len(syntax.name):value.start]
+                 for syntax, start, value in zip(syntaxes, starts, values)]
+        for n, site in enumerate(sites):
+            if len(site.targets) == 2:  # a circular move: the circle point goes
+                targets = site.targets
+                heads[n] = (text[starts[n] + len(syntaxes[n].name):targets[0].argument.start]
+                            + text[targets[1].argument.start:values[n].start])
+        tails = [text[value.end:end] for value, end in zip(values, ends)]
+        heads = ["MoveAbsJ" + head for head in heads]
+        statements = list(map("".join, zip(heads, dest_names, tails)))
+        slots = list(zip(heads, dest_names, tails))
+        modules = [motion.module for motion in motions]
+        routines = [motion.routine for motion in motions]
+        rows = [site.rows[-1] for site in sites]
+        if not extras:
+            self.editor.replace_many(starts, ends, statements)
+            idents = self.units.add_statements(modules, routines, statements, slots)
+            self.checks.extend(zip(idents, repeat(0), rows))
+            return
+        # the statements in the order of the move-by-move route: a move's inserted
+        # points, then the move
+        all_texts: list[str] = []
+        all_slots: list[JointSlot | None] = []
+        all_modules: list[str] = []
+        all_routines: list[str] = []
+        main_at: list[int] = []
+        inter_at: list[tuple[int, int, int]] = []  # (place in all_texts, segment, row)
+        done = 0
+        for k, (span, points, approach, segment) in extras.items():
+            main_at.extend(range(len(all_texts), len(all_texts) + k - done))
+            all_texts += statements[done:k]
+            all_slots += slots[done:k]
+            all_modules += modules[done:k]
+            all_routines += routines[done:k]
+            first = extra_at[k]
+            lines, variants, variant_slots = self._points_before(
+                sites[k], span, names[first:first + len(points)],
+                names[first + len(points)] if approach is not None else None)
+            for j, variant in enumerate(variants):
+                inter_at.append((len(all_texts), segment, span[0] + j))
+                all_texts.append(variant)
+                all_modules.append(modules[k])
+                all_routines.append(routines[k])
+            all_slots += variant_slots
+            if lines:
+                self.editor.insert(starts[k], "".join(lines))
+            main_at.append(len(all_texts))
+            all_texts.append(statements[k])
+            all_slots.append(slots[k])
+            all_modules.append(modules[k])
+            all_routines.append(routines[k])
+            done = k + 1
+        main_at.extend(range(len(all_texts), len(all_texts) + len(sites) - done))
+        all_texts += statements[done:]
+        all_slots += slots[done:]
+        all_modules += modules[done:]
+        all_routines += routines[done:]
+        self.editor.replace_many(starts, ends, statements)
+        idents = self.units.add_statements(all_modules, all_routines, all_texts, all_slots)
+        self.checks.extend(zip([idents[n] for n in main_at], repeat(0), rows))
+        self.inter_checks.extend((idents[n], segment, row) for n, segment, row in inter_at)
+
+    def _jointtarget_names(self, stems: list[str], literals: list[str],
+                           motions: list[MotionInstruction], operands: list[Operand]
+                           ) -> list[str]:
+        """`_jointtarget_name` for many jointtargets in turn: the names, the new ones
+        allocated and declared together."""
+        keys = list(zip(map(str.lower, stems), literals))
+        known = self.jt_names
+        first: dict[tuple[str, str], int] = {}
+        deque(map(first.setdefault, keys, range(len(keys))), maxlen=0)  # first use of each
+        if len(first) == len(keys) and known.keys().isdisjoint(first):
+            # every target its own new jointtarget (the usual case)
+            order: list[int] | range = range(len(keys))
+            names = self.names.allocate_many(stems, "jt_")
+            name_at = names
+            known.update(zip(keys, names))
+        else:
+            order = [n for key, n in first.items() if key not in known]
+            names = self.names.allocate_many([stems[n] for n in order], "jt_")
+            known.update(zip([keys[n] for n in order], names))
+            name_at = list(map(known.__getitem__, keys))
+        self._add_declarations(
+            [motions[n] for n in order], [operands[n] for n in order],
+            [f"CONST jointtarget {name}:={literals[n]};" for n, name in zip(order, names)])
+        return name_at
+
+    def _points_before(self, site: Site, inter: tuple[int, int] | None, inter_names: list[str],
+                       approach_name: str | None
+                       ) -> tuple[list[str], list[str], list[JointSlot | None]]:
+        """The statements inserted before a move, to its intermediate points (`inter`:
+        their rows in the refinement) and its approach point: (the lines to insert, the
+        intermediate points' statements, their JointSlots — None in the move-by-move
+        route, which makes each statement from its edits)."""
+        motion = site.motion
+        indent = indent_before(self.program, motion.syntax.start)
+        sep = "\n" + indent if indent is not None else " "
+        drops = [(op.argument.start, op.argument.end, "")
+                 for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
+        lines: list[str] = []
+        variants: list[str] = []
+        slots: list[JointSlot | None] = []
+        if inter is not None:
+            zone = motion.zone
+            zone_value = zone.argument.value if zone is not None else None
+            zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
+                         if zone_value is not None else [])
+            self.inserted.update(inter_names)
+            parts = statement_variant(self.program, motion, joint_edits(
+                site, _NAME_MARK) + drops + zone_edit).split(_NAME_MARK) if self._columns else []
+            if len(parts) == 2:  # one statement with a mark where the name goes
+                slots = [(parts[0], sub, parts[1]) for sub in inter_names]
+                variants = list(map("".join, slots))
+            else:
+                variants = [statement_variant(self.program, motion,
+                                              joint_edits(site, sub) + drops + zone_edit)
+                            for sub in inter_names]
+                slots = [None] * len(variants)
+            lines = [variant + sep for variant in variants]
+        if approach_name is not None:  # stands still there (fine), then arrives from one side
+            self.inserted.add(approach_name)
+            lines.append(statement_variant(self.program, motion,
+                                            joint_edits(site, approach_name) + drops) + sep)
+        return lines, variants, slots
+
+    def _stems(self, motions: list[MotionInstruction], operands: list[Operand]) -> list[str]:
+        """`_stem` of many targets: a name where the target has one, else the
+        instruction and its line (the lines found in one search)."""
+        stems: list[str | None] = [
+            operand.name if operand.form == "name" and operand.name
+            else f"{operand.name}_{operand.form}"
+            if operand.form in ("offs", "reltool") and operand.name else None
+            for operand in operands]
+        unnamed = [n for n, stem in enumerate(stems) if stem is None]
+        if unnamed:
+            lines = self.editor.line_numbers([motions[n].syntax.start for n in unnamed])
+            for n, line in zip(unnamed, lines):
+                stems[n] = f"{motions[n].name}_L{line}"
+        return stems  # type: ignore[return-value]
+
+    def _add_declarations(self, motions: list[MotionInstruction], operands: list[Operand],
+                          texts: list[str]) -> None:
+        """`_add_declaration` for many targets: each anchor's block and the check units
+        are extended by runs of targets with the same anchor (a CAM program's new
+        declarations all go among one module's)."""
+        module_of: dict[str, Any] = {}
+        for module in self.program.modules:
+            module_of.setdefault(module.name, module)
+        modules = [motion.module for motion in motions]
+        if all(operand.declaration is None for operand in operands) and len(set(modules)) == 1:
+            # no target declared in the program (inline targets): all among one module's
+            module = modules[0] if modules else ""
+            if modules:
+                self._extend_block(module.lower(), module_of[module], (module, None), texts)
+            return
+        anchors: list[Any] = []
+        targets: list[Any] = []
+        wheres: list[tuple[str, str | None]] = []
+        for n, (motion, operand) in enumerate(zip(motions, operands)):
+            decl = operand.declaration
+            if (decl is not None and operand.form == "name" and decl.module == motion.module
+                    and (decl.routine is None or decl.routine.lower() == motion.routine.lower())):
+                anchors.append(id(decl))  # after the declaration
+                targets.append(decl)
+                wheres.append((decl.module, decl.routine))
+                if decl.syntax.local and not texts[n].startswith("LOCAL"):
+                    texts[n] = "LOCAL " + texts[n]
+            else:
+                anchors.append(motion.module.lower())  # among the module's declarations
+                targets.append(module_of[motion.module])
+                wheres.append((motion.module, None))
+        blocks, order, get = self.decl_blocks, self.decl_anchor_order, self.decl_blocks.get
+        for anchor, target, text in zip(anchors, targets, texts):
+            block = get(anchor)
+            if block is None:
+                blocks[anchor] = [text]
+                order.append((anchor, target))
+            else:
+                block.append(text)
+        pos = 0
+        for where, run in groupby(wheres):  # the check units, by runs of one scope
+            size = len(list(run))
+            self.units.add_jointtarget_declarations(*where, texts[pos:pos + size])
+            pos += size
+
+    def _extend_block(self, anchor: Any, target: Any, where: tuple[str, str | None],
+                      texts: list[str]) -> None:
+        """Queue jointtarget declarations at one anchor (`_add_declaration`'s second half)."""
+        block = self.decl_blocks.get(anchor)
+        if block is None:
+            block = self.decl_blocks[anchor] = []
+            self.decl_anchor_order.append((anchor, target))
+        block.extend(texts)
+        self.units.add_jointtarget_declarations(*where, texts)
 
     def _filtered(self, filtered_sites: list[int]) -> None:
         """Filtered robtargets: in the declaration when only compensated moves use it,
@@ -342,6 +565,7 @@ class _Emitter:
         ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
         placement = t.placement.take(rows)
         tcp, context = t.pose[rows], self.solved.context.take(rows)
+        joints = self.solved.q_cmd[rows]  # as written where a jointtarget is
         if self.inter_checks:
             inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
             frames = self.refined.frames.take(seg)
@@ -351,11 +575,12 @@ class _Emitter:
             ids = np.concatenate([ids, inter_ids])
             slots = np.concatenate([slots, np.zeros(len(seg), int)])
             tcp = np.concatenate([tcp, self.refined.points.pose[index]])
+            joints = np.concatenate([joints, self.refined.points.q_cmd[index]])
             inter = self.refined.context.take(seg)
             if self.refined.direction is not None:
                 inter = replace(inter, last_direction=self.refined.direction[index])
             context = Context.concatenate(context, inter)
-        return Expected(ids, slots, tcp, placement, context)
+        return Expected(ids, slots, tcp, placement, context, joints)
 
 
 

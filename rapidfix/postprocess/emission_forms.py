@@ -3,8 +3,8 @@
 Each form is written out for speed and has a general counterpart it must equal
 (tests/postprocess/test_emission_forms.py compares them):
 
-- jointtarget literals for many targets at once: one C-level `%` for the whole
-  block, trailing zeros cut by one regular-expression pass — exactly the text
+- jointtarget literals for many targets at once, their digits built in numpy for the
+  whole block (`micro_units`, `_joint_blocks`) — exactly the text
   `rapidfix.rapid.format.format_jointtarget` gives for each;
 - robtarget literals, as `format_robtarget` writes them;
 - the jointtarget declaration, `format_declaration("CONST", "jointtarget", ...)`;
@@ -14,53 +14,104 @@ Each form is written out for speed and has a general counterpart it must equal
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from rapidfix.kinematics import pose_to_pos_quat
 from rapidfix.postprocess.resolve import Site
 from rapidfix.rapid import MotionInstruction, Program, format_num, format_robtarget
 
-_JOINTS = "[[" + ",".join(["%.6f"] * 6) + "],"
+# The ASCII digits of 0..9999 packed in little-endian integers (bytes in text order), and
+# of 0..99: the digits of many numbers are looked up at once, not formatted one by one.
+_DIGITS4 = np.frombuffer("".join(f"{i:04d}" for i in range(10000)).encode(), np.uint32)
+_DIGITS2 = np.frombuffer("".join(f"{i:02d}" for i in range(100)).encode(), np.uint16)
+# One number as fixed-width bytes: sign, 8 integer digits, '.', 6 decimals, separator.
+_NUMBER = np.dtype([("sign", "u1"), ("int", "u4", 2), ("dot", "u1"), ("dec4", "u4"),
+                    ("dec2", "u2"), ("sep", "u1")])
+_WIDTH = _NUMBER.itemsize  # 17
+# Which integer digits a number of 1..8 digits keeps (leading zeros go); which decimals
+# a fraction of 0..6 significant decimals keeps (trailing zeros go).
+_INT_KEEP = np.array([[c >= 8 - n for c in range(8)] for n in range(9)], bool)
+_DEC_KEEP = np.array([[c < n for c in range(6)] for n in range(7)], bool)
 
 
-# Trailing zeros of a fraction, before the ',' or ']' that ends the number (a pattern
-# that starts with its literal '0' lets the regular-expression engine skip ahead to it).
-_TRAILING = re.compile(r"0+(?=[,\]])")
+def micro_units(x: np.ndarray) -> np.ndarray:
+    """x (|x| < 1e8) in millionths, rounded exactly as `'%.6f' % x` rounds (int64).
 
-
-def _trim(text: str) -> str:
-    """Trailing zeros and dots cut from numbers written with `%.6f`, each followed by
-    ',' or ']'; '-0' written '0'.
-
-    Every number has exactly six decimals, so its last '0' before ',' or ']' is a
-    fraction's: the zeros cut never reach an integer part, whose digits stand before
-    the '.'; a '.' left just before ',' or ']' lost all six and goes too (nothing
-    else in these literals puts a '.' there). A '-' stands only at the start of a
-    number, so '-0.000000' is a negative zero.
+    `rint(x * 1e6)` is that rounding unless the product lies within its own rounding
+    error of a half; those few numbers are formatted by Python and read back.
     """
-    cut = _TRAILING.sub("", text.replace("-0.000000", "0.000000"))
-    return cut.replace(".,", ",").replace(".]", "]")
+    y = x * 1e6
+    m = np.rint(y)
+    near = np.abs(np.abs(y - m) - 0.5) <= np.abs(y) * 1e-15 + 1e-9
+    m = m.astype(np.int64)
+    if near.any():
+        flat = m.reshape(-1)
+        idx = np.flatnonzero(near.ravel())
+        flat[idx] = [int(f"{v:.6f}".replace(".", "")) for v in x.ravel()[idx].tolist()]
+    return m
+
+
+def _joint_blocks(q_deg: np.ndarray) -> list[str]:
+    """`[[j1,...,j6],` for each row of q_deg (K,6), |q| < 1e8, numbers as `format_num`
+    writes them: all numbers' bytes are built at once in numpy (sign, digits looked up
+    four at a time, '.', decimals) and the bytes a number does not write (its sign when
+    positive, leading zeros, trailing zeros of the fraction, a '.' without decimals)
+    are dropped by one mask."""
+    rows = q_deg.shape[0]
+    m = micro_units(q_deg).reshape(-1)
+    whole, frac = np.divmod(np.abs(m), 1_000_000)
+    number = np.empty(len(m), _NUMBER)
+    number["sign"] = ord("-")
+    high, low = np.divmod(whole, 10_000)
+    digits = number["int"]
+    digits[:, 0] = _DIGITS4[high]
+    digits[:, 1] = _DIGITS4[low]
+    number["dot"] = ord(".")
+    four, two = np.divmod(frac, 100)
+    number["dec4"] = _DIGITS4[four]
+    number["dec2"] = _DIGITS2[two]
+    number["sep"] = ord(",")
+    n_int = 1 + sum((whole >= 10 ** k).view(np.int8) for k in range(1, 8))
+    n_dec = 6 - sum((frac % 10 ** k == 0).view(np.int8) for k in range(1, 7))
+    keep = np.empty((len(m), _WIDTH), bool)
+    keep[:, 0] = m < 0  # a number that rounds to 0 is written '0'
+    keep[:, 1:9] = _INT_KEEP[n_int]
+    keep[:, 9] = n_dec > 0
+    keep[:, 10:16] = _DEC_KEEP[n_dec]
+    keep[:, 16] = True
+    width = 6 * _WIDTH
+    chars = number.view(np.uint8).reshape(rows, width)
+    chars[:, width - 1] = ord("]")  # the sixth number's separator
+    line = np.empty((rows, width + 4), np.uint8)
+    line[:, :2] = ord("[")
+    line[:, 2:-2] = chars
+    line[:, -2] = ord(",")
+    line[:, -1] = ord("\n")
+    kept = np.ones((rows, width + 4), bool)
+    kept[:, 2:-2] = keep.reshape(rows, width)
+    return line[kept].tobytes().decode("ascii").split("\n")[:-1]
+
+
+def _extax_texts(extax: np.ndarray) -> list[str]:
+    """`[e1,...,e6]]` for each row of extax (K,6); each distinct row formatted once."""
+    if not len(extax):
+        return []
+    if (extax == extax[0]).all():  # the usual case: the same axes (or none) everywhere
+        rows, inverse = extax[:1], np.zeros(len(extax), int)
+    else:
+        rows, inverse = np.unique(extax, axis=0, return_inverse=True)
+    texts = ["[" + ",".join(format_num(v) for v in row) + "]]" for row in rows.tolist()]
+    return [texts[i] for i in inverse.reshape(-1).tolist()]
 
 
 def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
     """`[[j1,...,j6],[e1,...,e6]]` for joints (K,6) in degrees and external axes (K,6)."""
     q_deg = np.asarray(q_deg, dtype=float)
-    ext_cache: dict[tuple, str] = {}
-    ext_text = []
-    for row in map(tuple, np.asarray(extax, dtype=float).tolist()):
-        text = ext_cache.get(row)
-        if text is None:
-            text = ext_cache[row] = "[" + ",".join(format_num(v) for v in row) + "]]"
-        ext_text.append(text)
+    ext_text = _extax_texts(np.asarray(extax, dtype=float).reshape(-1, 6))
     if q_deg.size and not np.abs(q_deg).max() < 1e8:  # not finite, or written with E
         joints = ["[[" + ",".join(format_num(v) for v in row) + "]," for row in q_deg.tolist()]
         return [j + e for j, e in zip(joints, ext_text)]
-    # one C-level formatting of every number, one trim of the whole block
-    rows = len(q_deg)
-    block = _trim("\n".join([_JOINTS] * rows) % tuple(q_deg.ravel().tolist())).split("\n") \
-        if rows else []
+    block = _joint_blocks(q_deg.reshape(-1, 6)) if len(q_deg) else []
     return [j + e for j, e in zip(block, ext_text)]
 
 

@@ -17,8 +17,13 @@ from collections.abc import Iterable
 MAX_IDENTIFIER = 32
 #: an identifier-shaped word of RAPID text (keywords included)
 IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_LOWER_IDENTIFIER = re.compile(r"[a-z][a-z0-9_]*")
 _BAD = re.compile(r"[^A-Za-z0-9_]+")
 _WORD = re.compile(r"[a-z0-9_]*")
+# Stems joined by newlines, each an identifier that needs no cleaning: a letter first,
+# no '_' at either end (what `allocate` would strip)
+_PLAIN_STEMS = re.compile(r"[A-Za-z](?:[A-Za-z0-9_]*[A-Za-z0-9])?"
+                          r"(?:\n[A-Za-z](?:[A-Za-z0-9_]*[A-Za-z0-9])?)*")
 
 
 def identifiers_in(text: str) -> set[str]:
@@ -30,6 +35,8 @@ def identifiers_in(text: str) -> set[str]:
 
 def identifier_counts(text: str) -> Counter[str]:
     """How often each identifier-shaped word occurs in a RAPID text, lower-cased."""
+    if text.isascii():  # lower-casing first is quicker and, for ASCII, the same
+        return Counter(_LOWER_IDENTIFIER.findall(text.lower()))
     return Counter(map(str.lower, IDENTIFIER.findall(text)))
 
 
@@ -114,20 +121,41 @@ class NameAllocator:
         return key not in self._taken
 
     def allocate_many(self, stems: list[str], prefix: str = "jt_") -> list[str]:
-        """`allocate` for each stem in turn, at list speed in the usual case (every stem a
-        plain identifier, every name new and distinct), one by one otherwise."""
-        simple = (prefix[:1].isalpha() and prefix.isascii()
-                  and all(s.isascii() and s.isidentifier() and s[0] != "_" and s[-1] != "_"
-                          and len(s) + len(prefix) <= MAX_IDENTIFIER for s in stems))
-        if simple and stems:
+        """`allocate` for each stem in turn: at list speed when every stem is a plain
+        identifier and every name new and distinct, by a lean loop when some are not,
+        one by one through `allocate` otherwise."""
+        if not stems:
+            return []
+        joined = "\n".join(stems)
+        simple = (prefix[:1].isalpha() and prefix.isascii() and joined.isascii()
+                  and joined.count("\n") == len(stems) - 1
+                  and _PLAIN_STEMS.fullmatch(joined) is not None
+                  and max(map(len, stems)) + len(prefix) <= MAX_IDENTIFIER)
+        if simple:
             head = prefix[:16].lower()
             if head not in self._heads:
                 self._scan(head)
             names = [prefix + s for s in stems]
-            keys = [name.lower() for name in names]
-            if len(set(keys)) == len(keys) and self._taken.isdisjoint(keys):
-                self._taken.update(keys)
+            keys = (prefix + joined.replace("\n", "\n" + prefix)).lower().split("\n")
+            taken = self._taken
+            if len(set(keys)) == len(keys) and taken.isdisjoint(keys):
+                taken.update(keys)
                 return names
+            # one by one, as `allocate` does for a stem that needs no cleaning; the
+            # suffixes a name has tried stay taken, so its next use starts after them
+            tried: dict[str, int] = {}
+            for n, key in enumerate(keys):
+                if key in taken:
+                    base, counter, candidate = names[n], tried.get(key, 1), key
+                    while candidate in taken:
+                        counter += 1
+                        suffix = f"_{counter}"
+                        names[n] = base[: MAX_IDENTIFIER - len(suffix)] + suffix
+                        candidate = names[n].lower()
+                    tried[key] = counter
+                    key = candidate
+                taken.add(key)
+            return names
         return [self.allocate(s, prefix) for s in stems]
 
     def allocate(self, stem: str, prefix: str = "jt_") -> str:

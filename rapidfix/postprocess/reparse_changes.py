@@ -16,8 +16,12 @@ jointtarget and the MoveAbsJ that names it sit in the same check module).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import groupby
 
 from rapidfix.rapid import MotionInstruction, Program, parse_program
+
+#: a statement naming the jointtarget it moves to: (text before the name, the name, text after)
+JointSlot = tuple[str, str, str]
 
 
 @dataclass
@@ -25,28 +29,75 @@ class CheckUnits:
     """New statements and declarations of one rewrite, by (module, routine).
 
     `add_statement` returns the statement's id; `order()` lists the ids in the
-    order their motion instructions appear in the check program.
+    order their motion instructions appear in the check program. Declarations of
+    jointtargets (`add_jointtarget_declarations`) and statements given with their
+    `JointSlot` (a MoveAbsJ to a jointtarget by name) are also kept apart, so that the
+    read-back can take them as columns (`verify`).
     """
 
     comments: list[str] = field(default_factory=list)
     _decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
+    _joint_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
+    _other_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
     _statements: dict[tuple[str, str], list[tuple[int, str]]] = field(default_factory=dict)
+    #: by statement id: its JointSlot, or None
+    _slots: list[JointSlot | None] = field(default_factory=list)
     _count: int = 0
 
     def add_declaration(self, module: str, routine: str | None, text: str) -> None:
         """A new or replaced declaration (`routine` None at module level)."""
         self._decls.setdefault((module, routine), []).append(text)
+        self._other_decls.setdefault((module, routine), []).append(text)
 
     def add_statement(self, module: str, routine: str, text: str) -> int:
         """A new or replaced motion instruction; returns its id."""
         ident = self._count
         self._count += 1
         self._statements.setdefault((module, routine), []).append((ident, text))
+        self._slots.append(None)
         return ident
+
+    def add_jointtarget_declarations(self, module: str, routine: str | None,
+                                     texts: list[str]) -> None:
+        """`add_declaration` for many `CONST jointtarget` declarations of one scope."""
+        self._decls.setdefault((module, routine), []).extend(texts)
+        self._joint_decls.setdefault((module, routine), []).extend(texts)
+
+    def add_statements(self, modules: list[str], routines: list[str], texts: list[str],
+                       slots: list[JointSlot | None] | None = None) -> range:
+        """`add_statement` for many statements (module and routine of each, and the
+        JointSlot of each or None); their ids."""
+        first = self._count
+        self._count += len(texts)
+        statements = self._statements
+        pos = first
+        for key, run in groupby(zip(modules, routines)):
+            size = len(list(run))
+            statements.setdefault(key, []).extend(
+                zip(range(pos, pos + size), texts[pos - first:pos - first + size]))
+            pos += size
+        self._slots.extend(slots if slots is not None else [None] * len(texts))
+        return range(first, self._count)
 
     @property
     def statement_count(self) -> int:
         return self._count
+
+    def joint_slots(self) -> list[JointSlot | None]:
+        """The JointSlot of each statement (by id), None for the others."""
+        return self._slots
+
+    def joint_declarations(self) -> dict[tuple[str, str | None], list[str]]:
+        """The jointtarget declarations by (module, routine or None)."""
+        return self._joint_decls
+
+    def other_declarations(self) -> dict[tuple[str, str | None], list[str]]:
+        """The declarations other than `joint_declarations`, by (module, routine or None)."""
+        return self._other_decls
+
+    def statement_scopes(self) -> list[tuple[tuple[str, str], list[int]]]:
+        """(module, routine) and the ids of its statements, for each scope."""
+        return [(key, [ident for ident, _ in items]) for key, items in self._statements.items()]
 
     def _routines(self) -> dict[str, dict[str, None]]:
         """Module -> its routines (an ordered set: a program may have thousands)."""
@@ -57,20 +108,26 @@ class CheckUnits:
                 routines[routine] = None
         return by_module
 
-    def text(self) -> tuple[str, list[int]]:
-        """The check program and the statement ids in the order they appear in it."""
+    def text(self, others_only: bool = False) -> tuple[str, list[int]]:
+        """The check program and the statement ids in the order they appear in it;
+        `others_only`: without the jointtarget declarations and the statements with a
+        JointSlot."""
         out: list[str] = []
         order: list[int] = []
         modules = self._routines() or {"RapidfixCheck": {}}  # the comments alone
+        decls = self._other_decls if others_only else self._decls
+        slots = self._slots
         for n, (module, routines) in enumerate(modules.items()):
             out.append(f"MODULE {module}")
             if n == 0:
                 out.extend(self.comments)
-            out.extend(self._decls.get((module, None), []))
+            out.extend(decls.get((module, None), []))
             for routine in routines:
                 out.append(f"PROC {routine}()")
-                out.extend(self._decls.get((module, routine), []))
+                out.extend(decls.get((module, routine), []))
                 for ident, statement in self._statements.get((module, routine), []):
+                    if others_only and slots[ident] is not None:
+                        continue
                     out.append(statement)
                     order.append(ident)
                 out.append("ENDPROC")

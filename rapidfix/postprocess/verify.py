@@ -12,7 +12,10 @@ and the intended TCP is the predicted deviation.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
+from itertools import repeat
+from operator import is_not, itemgetter
 
 import numpy as np
 
@@ -22,7 +25,14 @@ from rapidfix.kinematics import RobotModel, pose
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import ik_on_conf
 from rapidfix.postprocess.reparse_changes import CheckUnits
-from rapidfix.rapid import MotionInstruction, ReadBack, read_targets_full, read_targets_in_bulk
+from rapidfix.rapid import (
+    MotionInstruction,
+    ReadBack,
+    parse_program,
+    read_jointtarget_declarations,
+    read_targets_full,
+    read_targets_in_bulk,
+)
 
 
 @dataclass(frozen=True)
@@ -39,6 +49,9 @@ class Expected:
     tcp: np.ndarray
     placement: Placement
     context: Context
+    #: (K,6) rad: the joints the rewrite wrote for a pose it wrote as a jointtarget (what
+    #: the read-back must find there); None: not checked
+    joints: np.ndarray | None = None
 
 
 def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
@@ -60,15 +73,172 @@ def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
 def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     """Parse the rewritten parts and read the target of every expected pose from them.
 
-    Rewritten parts made of simple statements only (a CAM program's) are read in
-    bulk (`rapidfix.rapid.readback`: Lark parses them with the same grammar, and the
-    values are read once per run); anything else, and anything the bulk reader
-    does not take, goes the full route through the program model, which also
-    explains a syntax error. Both give the same values (tests compare them).
+    The MoveAbsJ statements and jointtarget declarations the emission made as columns
+    are read as columns (`_read_columns`); rewritten parts made of simple statements
+    only are read in bulk (`rapidfix.rapid.readback`: Lark parses them with the same
+    grammar, and the values are read once per run); anything else, and anything those
+    readers do not take, goes the full route through the program model, which also
+    explains a syntax error. All give the same values (tests compare them). A
+    jointtarget that does not hold the joints the rewrite meant to write stops it.
     """
-    text, order = units.text()
-    found = read_targets_in_bulk(text, order, expected.motion, expected.slot)
-    return found if found is not None else read_back_full(units, filename, expected)
+    found = _read_columns(units, expected, filename)
+    if found is None:
+        text, order = units.text()
+        found = read_targets_in_bulk(text, order, expected.motion, expected.slot)
+    if found is None:
+        found = read_back_full(units, filename, expected)
+    _check_joints(found, expected, filename)
+    return found
+
+
+def _check_joints(read: ReadBack, expected: Expected, filename: str) -> None:
+    """Every jointtarget read back holds the joints meant, as written to six decimals."""
+    if expected.joints is None or not read.joint.any():
+        return
+    meant = np.degrees(expected.joints[read.joint])
+    got = read.robax[read.joint]
+    bad = ~(np.abs(got - meant) <= 5e-7 + np.abs(meant) * 1e-12)
+    if bad.any():
+        first = int(np.flatnonzero(bad.any(axis=1))[0])
+        row = int(np.flatnonzero(read.joint)[first])
+        raise RapidSemanticError(
+            f"the rewritten program commands other joints than planned (statement "
+            f"{int(expected.motion[row])} of the rewritten parts: {got[first].tolist()} "
+            f"degrees, planned {meant[first].round(6).tolist()}); nothing was written",
+            file=filename or None, hint="please report this as a rapidfix bug")
+
+
+# the jointtarget a template statement moves to, and the axes it holds
+_TEMPLATE_NAME = "rapidfix_template_target"
+_TEMPLATE_AXES = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+# the name a declaration declares (after LOCAL / TASK, the storage and the type)
+_DECLARED = re.compile(r"\s*(?:LOCAL\s+)?(?:TASK\s+)?(?:VAR|PERS|CONST)\s+[A-Za-z][A-Za-z0-9_]*"
+                       r"\s+([A-Za-z][A-Za-z0-9_]*)", re.IGNORECASE)
+
+
+def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadBack | None:
+    """The targets, with the MoveAbsJ statements the emission made as columns (a JointSlot:
+    text before the name, the name, text after) read as columns: the same check as
+    parsing them, at list speed. None when there are none or anything does not fit
+    (`read_back` then parses the whole).
+
+    - The jointtarget declarations: one regular-expression pass over all of them and one
+      conversion of their numbers (`read_jointtarget_declarations`); a name declared
+      twice in a scope, or also by another new declaration of the module (the names
+      are allocated to be new, so that is a bug), is a clash and stops the rewrite.
+    - The statements: each distinct text around the name (a CAM program has a few dozen)
+      is parsed once, with a name of the same kind in its place, and must be a call
+      whose target reads that name's jointtarget; each name is found as RAPID finds it
+      (the routine's data, then the module's) among the new jointtargets.
+    - Everything else (filtered robtargets, replaced declarations, the header comments)
+      is parsed and read as before, on its own.
+    """
+    slots = units.joint_slots()
+    k = expected.motion.shape[0]
+    if not k or not any(slots):
+        return None
+    is_joint = np.fromiter(map(is_not, slots, repeat(None)), bool, len(slots))
+    joint_rows = is_joint[expected.motion]
+    if expected.slot[joint_rows].any():
+        return None
+    # the declarations
+    declared = units.joint_declarations()
+    read = read_jointtarget_declarations([t for texts in declared.values() for t in texts])
+    if read is None:
+        return None
+    names, axes = read
+    tables: dict[tuple[str, str | None], dict[str, int]] = {}
+    pos = 0
+    for key, texts in declared.items():
+        table = dict(zip(names[pos:pos + len(texts)], range(pos, pos + len(texts))))
+        if len(table) < len(texts):
+            _clash(next(n for n in names[pos:pos + len(texts)]
+                        if names[pos:pos + len(texts)].count(n) > 1), key, filename)
+        tables[key] = table
+        pos += len(texts)
+    others = units.other_declarations()
+    for (module, _routine), texts in others.items():
+        for text in texts:
+            match = _DECLARED.match(text)
+            if match is None:
+                return None
+            name = match.group(1).lower()
+            for (joint_module, joint_routine), table in tables.items():
+                if joint_module == module and name in table:
+                    _clash(name, (joint_module, joint_routine), filename)
+    # the statements' names, found in their scopes
+    where = np.full(len(slots), -1, dtype=np.int64)
+    for (module, routine), idents in units.statement_scopes():
+        joint_idents = [i for i in idents if slots[i] is not None]
+        if not joint_idents:
+            continue
+        written = "\n".join([slots[i][1] for i in joint_idents])
+        lowered = written.lower().split("\n")
+        if not written.isascii() or len(lowered) != len(joint_idents):
+            return None
+        local = tables.get((module, routine))
+        found = list(map(tables.get((module, None), {}).get, lowered))
+        if local:
+            found = [local.get(name, at) for name, at in zip(lowered, found)]
+        if None in found:
+            return None
+        where[joint_idents] = found
+    if not _templates_move_to_their_name(dict.fromkeys(
+            map(itemgetter(0, 2), filter(None, slots)))):
+        return None
+    # everything else, on its own
+    text, order = units.text(others_only=True)
+    local_id = np.full(len(slots), -1, dtype=np.int64)
+    local_id[order] = np.arange(len(order))
+    rows = np.flatnonzero(~joint_rows)
+    motion, slot = local_id[expected.motion[rows]], expected.slot[rows]
+    other = read_targets_in_bulk(text, list(range(len(order))), motion, slot)
+    if other is None:
+        try:
+            program = parse_program(text, f"{filename} (rewritten parts)")
+            if len(program.motions) != len(order):
+                return None
+            other = read_targets_full(program.motions, motion, slot)
+        except RapidfixError:
+            return None
+    out = ReadBack.empty(k)
+    for field in ("joint", "robax", "trans", "rot", "conf"):
+        getattr(out, field)[rows] = getattr(other, field)
+    joint = np.flatnonzero(joint_rows)
+    out.joint[joint] = True
+    out.robax[joint] = axes[where[expected.motion[joint]]]
+    return out
+
+
+def _clash(name: str, scope: tuple[str, str | None], filename: str) -> None:
+    module, routine = scope
+    raise RapidSemanticError(
+        f"the rewritten program declares {name} twice in "
+        f"{module if routine is None else module + '.' + routine}; nothing was written",
+        file=filename or None, hint="please report this as a rapidfix bug")
+
+
+def _templates_move_to_their_name(templates: dict[tuple[str, str], None]) -> bool:
+    """Each (text before, text after) around a name, with a name in between, is one
+    call whose target reads that name's jointtarget."""
+    axes = ",".join(f"{v:g}" for v in _TEMPLATE_AXES)
+    lines = ["MODULE RapidfixTemplates",
+             f"CONST jointtarget {_TEMPLATE_NAME}:=[[{axes}],[0,0,0,0,0,0]];", "PROC t()"]
+    lines += [f"{head}{_TEMPLATE_NAME}{tail}" for head, tail in templates]
+    lines += ["ENDPROC", "ENDMODULE", ""]
+    text = "\n".join(lines)
+    count = len(templates)
+    motion, slot = np.arange(count), np.zeros(count, dtype=np.int64)
+    read = read_targets_in_bulk(text, list(range(count)), motion, slot)
+    if read is None:
+        try:
+            program = parse_program(text, "templates")
+            if len(program.motions) != count:
+                return False
+            read = read_targets_full(program.motions, motion, slot)
+        except RapidfixError:
+            return False
+    return bool(read.joint.all() and (read.robax == _TEMPLATE_AXES).all())
 
 
 def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:

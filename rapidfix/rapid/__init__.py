@@ -43,7 +43,12 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
         format_tooldata,
         format_value,
     )
-    from rapidfix.rapid.readback import ReadBack, read_targets_full, read_targets_in_bulk
+    from rapidfix.rapid.readback import (
+        ReadBack,
+        read_jointtarget_declarations,
+        read_targets_full,
+        read_targets_in_bulk,
+    )
     from rapidfix.rapid.syntax import (
         Assignment,
         NameRef,
@@ -83,6 +88,7 @@ LAZY_EXPORTS = {
     "format_tooldata": "format",
     "format_value": "format",
     "placeholders_in": "syntax_errors",
+    "read_jointtarget_declarations": "readback",
     "read_targets_full": "readback",
     "read_targets_in_bulk": "readback",
     "target_rows": "target_list",
@@ -132,6 +138,7 @@ __all__ = [
     "motion_spec",
     "parse_program",
     "placeholders_in",
+    "read_jointtarget_declarations",
     "read_targets_full",
     "read_targets_in_bulk",
     "target_rows",

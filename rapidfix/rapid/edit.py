@@ -8,9 +8,8 @@ ending; the result is encoded with the file's encoding and BOM. With no edits,
 
 from __future__ import annotations
 
-import operator
 from collections.abc import Sequence
-from typing import NamedTuple
+from itertools import chain
 
 import numpy as np
 
@@ -22,22 +21,16 @@ class EditConflict(ValueError):
     """Two edits touch the same text."""
 
 
-class Edit(NamedTuple):
-    start: int
-    end: int
-    text: str  # with '\n' line endings; converted to the file's when rendered
-    order: int
-
-
-_order_key = operator.itemgetter(0, 1, 3)  # (start, end, order)
-
-
 class Editor:
     """Collects replacements and insertions for one Program and renders the result."""
 
     def __init__(self, program: Program) -> None:
         self.program = program
-        self._edits: list[Edit] = []
+        # the edits as columns, in the order they were made: (start, end) offsets and
+        # new text (a CAM program has hundreds of thousands of them)
+        self._starts: list[int] = []
+        self._ends: list[int] = []
+        self._texts: list[str] = []
 
     # ------------------------------------------------------------ primitives
     def replace(self, span: Span | tuple[int, int], text: str) -> None:
@@ -45,7 +38,9 @@ class Editor:
         start, end = (span.start, span.end) if isinstance(span, Span) else span
         if not 0 <= start <= end <= len(self.program.text):
             raise ValueError(f"span {start}..{end} is outside the program text")
-        self._edits.append(Edit(start, end, text, len(self._edits)))
+        self._starts.append(start)
+        self._ends.append(end)
+        self._texts.append(text)
 
     def replace_many(self, starts: Sequence[int], ends: Sequence[int],
                      texts: Sequence[str]) -> None:
@@ -55,10 +50,12 @@ class Editor:
         if not starts:
             return
         size = len(self.program.text)
-        if min(starts) < 0 or max(ends) > size or any(a > b for a, b in zip(starts, ends)):
+        if min(starts) < 0 or max(ends) > size or (
+                np.asarray(starts, dtype=np.int64) > np.asarray(ends, dtype=np.int64)).any():
             raise ValueError("a span is outside the program text")
-        n = len(self._edits)
-        self._edits.extend(map(Edit, starts, ends, texts, range(n, n + len(starts))))
+        self._starts.extend(starts)
+        self._ends.extend(ends)
+        self._texts.extend(texts)
 
     def insert(self, offset: int, text: str) -> None:
         """Insert `text` at a character offset."""
@@ -100,7 +97,11 @@ class Editor:
                 line = full[line_start:start]
                 pad = line[: len(line) - len(line.lstrip(" \t"))]
             if "\n" in text:
-                body = "".join(f"{pad}{part}\n" if part else "\n" for part in text.split("\n"))
+                parts = text.split("\n")
+                if "" in parts:  # an empty line gets no indentation
+                    body = "".join(f"{pad}{part}\n" if part else "\n" for part in parts)
+                else:
+                    body = pad + ("\n" + pad).join(parts) + "\n"
             else:
                 body = f"{pad}{text}\n" if text else "\n"
             if end == size and not full.endswith("\n"):
@@ -108,6 +109,14 @@ class Editor:
             positions.append(end)
             bodies.append(body)
         self.replace_many(positions, positions, bodies)
+
+    def line_numbers(self, offsets: Sequence[int]) -> list[int]:
+        """1-based line of each character offset of the program text (one search for all)."""
+        source = self.program.source
+        source.line_start(0)  # makes the line table
+        starts = np.asarray(source._line_starts)
+        return np.searchsorted(starts, np.asarray(offsets, dtype=np.int64),
+                               side="right").tolist()
 
     # ------------------------------------------------------------ conveniences
     def replace_statement(self, motion: MotionInstruction, text: str) -> None:
@@ -150,22 +159,23 @@ class Editor:
         text = text.replace("\r\n", "\n")
         return text if self.program.newline == "\n" else text.replace("\n", self.program.newline)
 
-    def _ordered(self) -> list[Edit]:
-        edits = sorted(self._edits, key=_order_key)
-        if len(edits) > 1:
+    def _ordered(self) -> tuple[list[int], list[int], list[str]]:
+        """(starts, ends, texts) of the edits by start, end and the order they were made."""
+        start = np.asarray(self._starts, dtype=np.int64)
+        end = np.asarray(self._ends, dtype=np.int64)
+        order = np.lexsort((end, start))  # stable: ties keep the order of making
+        start, end = start[order], end[order]
+        if len(order) > 1:
             # an edit may not start inside the one before it, nor two replacements
             # (not insertions) start at the same place; checked for all pairs at once
-            start = np.fromiter((e.start for e in edits), dtype=np.int64, count=len(edits))
-            end = np.fromiter((e.end for e in edits), dtype=np.int64, count=len(edits))
             nonempty = end > start
             clash = (start[1:] < end[:-1]) | (
                 (start[1:] == start[:-1]) & nonempty[:-1] & nonempty[1:])
             if clash.any():
-                after = edits[int(np.argmax(clash)) + 1]
-                raise EditConflict(
-                    f"edits overlap at {self.program.span(after.start, after.end).location}")
-        return edits
-
+                after = int(np.argmax(clash)) + 1
+                where = self.program.span(int(start[after]), int(end[after]))
+                raise EditConflict(f"edits overlap at {where.location}")
+        return start.tolist(), end.tolist(), list(map(self._texts.__getitem__, order.tolist()))
 
     def text(self) -> str:
         """The edited text (decoded)."""
@@ -173,18 +183,14 @@ class Editor:
         # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
         marker = "\r" if self.program.newline == "\n" else "\n"
         newlines = self._newlines
-        pieces = []
-        append = pieces.append
-        position = 0
-        for start, end, text, _order in self._ordered():
-            append(original[position:start])
-            append(newlines(text) if marker in text else text)
-            position = end
-        append(original[position:])
-        return "".join(pieces)
+        starts, ends, texts = self._ordered()
+        gaps = [original[a:b] for a, b in zip([0, *ends], starts)]
+        gaps.append(original[ends[-1] if ends else 0:])
+        texts = [newlines(text) if marker in text else text for text in texts]
+        return "".join(chain.from_iterable(zip(gaps, texts))) + gaps[-1]
 
     def render(self) -> bytes:
         """The edited file as bytes: original encoding, BOM and line endings."""
-        if not self._edits:
+        if not self._texts:
             return self.program.original
         return self.program.source.encode(self.text())

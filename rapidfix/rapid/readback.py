@@ -406,6 +406,57 @@ def joint_values(texts: list[str]) -> np.ndarray:
     return values
 
 
+# A jointtarget declaration as the rewrite writes it, on a line of its own: a data
+# declaration the grammar reads (CONST, a type name, a name, an all-numeric aggregate of
+# two groups of six numbers). A number here is any run of the characters a number is
+# written with; Python's `float` then reads exactly the grammar's numbers among those
+# (an optional sign, digits with an optional point, an optional exponent) and refuses
+# the rest.
+_NUMBER_CHARS = "[-+0-9.eE]+"
+_SIX = rf"{_NUMBER_CHARS}(?:,{_NUMBER_CHARS}){{5}}"
+_JOINTTARGET_DECLARATION = re.compile(
+    rf"^(?:LOCAL )?CONST jointtarget ([A-Za-z][A-Za-z0-9_]*):=\[\[({_SIX})\],\[({_SIX})\]\];$",
+    re.MULTILINE)
+
+
+@functools.lru_cache(maxsize=1)
+def reserved_words() -> frozenset[str]:
+    """The grammar's keywords, lower case (a name that is one may lex as the keyword)."""
+    from lark.lexer import PatternStr
+
+    return frozenset(t.pattern.value.lower() for t in run_parser().terminals
+                     if isinstance(t.pattern, PatternStr) and t.pattern.value.isalpha())
+
+
+def read_jointtarget_declarations(texts: list[str]) -> tuple[list[str], np.ndarray] | None:
+    """The names (lower case) and robot axes (K,6) of declarations that are each exactly
+    `[LOCAL ]CONST jointtarget name:=[[j1,...,j6],[e1,...,e6]];` — checked by one
+    regular-expression pass over all of them, the numbers read by one `np.array` —, or
+    None when a text is not of that form, a name is a keyword or a number is not finite
+    (the grammar, through the full route, decides those)."""
+    if not texts:
+        return [], np.zeros((0, 6))
+    joined = "\n".join(texts)
+    if joined.count("\n") != len(texts) - 1 or not joined.isascii():
+        return None
+    found = _JOINTTARGET_DECLARATION.findall(joined)
+    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
+        return None
+    names, robax, extax = zip(*found)
+    lowered = "\n".join(names).lower().split("\n")
+    if not reserved_words().isdisjoint(lowered):
+        return None
+    numbers = ",".join(robax).split(",")
+    try:
+        values = np.fromiter(map(float, numbers), float, len(numbers)).reshape(-1, 6)
+        external = [float(v) for group in set(extax) for v in group.split(",")]
+    except ValueError:
+        return None
+    if not (np.isfinite(values).all() and np.isfinite(external).all()):
+        return None
+    return lowered, values
+
+
 def _numbers(group: str) -> bool:
     try:
         tuple(map(float, group.split(",")))

@@ -62,3 +62,25 @@ def test_the_written_out_declaration_is_what_format_declaration_writes(name, row
     assert text == format_declaration("CONST", "jointtarget", name, literal)
     program = parse_program(f"MODULE M\n  {text}\nENDMODULE\n")
     assert program.declarations[0].name == name
+
+
+def test_jointtarget_literals_of_a_large_block_round_as_python_formats_each_number():
+    """The digits built in numpy for a whole block: halves exactly between two millionths
+    (k/128), numbers a rounding error away from a half, every magnitude below 1e8,
+    negatives that round to zero."""
+    from rapidfix.postprocess.emission_forms import jointtarget_literals
+    from rapidfix.rapid.format import format_jointtarget
+
+    rng = np.random.default_rng(7)
+    exact_halves = rng.integers(-10**6, 10**6, 600) / 128.0
+    near_halves = (rng.integers(-10**9, 10**9, 600) + 0.5) / 1e6
+    near_halves = near_halves + rng.choice([-1, 0, 1], 600) * np.spacing(near_halves)
+    magnitudes = rng.uniform(-1, 1, 600) * 10.0 ** rng.integers(-8, 8, 600)
+    micro = rng.integers(-10**7, 10**7, 600) / 1e6
+    tiny = rng.uniform(-6e-7, 6e-7, 600)
+    large = rng.uniform(-1e8, 1e8, 600)
+    q = np.concatenate([exact_halves, near_halves, magnitudes, micro, tiny, large]).reshape(-1, 6)
+    q = q[rng.permutation(len(q))]
+    extax = np.where(rng.random((len(q), 1)) < 0.5, 9e9, rng.uniform(-500, 500, (len(q), 6)))
+    got = jointtarget_literals(q, extax)
+    assert got == [format_jointtarget(r, e) for r, e in zip(q.tolist(), extax.tolist())]

@@ -57,11 +57,13 @@ def test_names_follow_the_robtarget_and_avoid_collisions():
     assert len(long) == MAX_IDENTIFIER and long.startswith("jt_x")
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=400, deadline=None)
 @given(
-    taken=st.lists(st.sampled_from(["jt_p1", "JT_P2", "jt_p1_2", "x", "jt_"]), max_size=4),
-    stems=st.lists(st.sampled_from(["p1", "P1", "p2", "p3", "_p4", "a" * 31, "b c", "9"]),
-                   max_size=8),
+    taken=st.lists(st.sampled_from(["jt_p1", "JT_P2", "jt_p1_2", "x", "jt_", "jt_p3_2"]),
+                   max_size=4),
+    stems=st.lists(st.sampled_from(["p1", "P1", "p2", "p3", "_p4", "a" * 31, "b c", "9",
+                                    "p1_2", "P1_3", "a" * 29, "A" * 29, "a" * 27 + "_2"]),
+                   max_size=12),
     prefix=st.sampled_from(["jt_", "ft_", "_"]),
 )
 def test_allocating_many_names_gives_what_allocating_one_by_one_gives(taken, stems, prefix):

@@ -156,23 +156,15 @@ def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, com
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-class _NoPointsButTheLoop(dict):
-    """No intermediate points, yet truthy: the rewrite takes its move-by-move loop."""
-
-    def __bool__(self):
-        return True
-
-
 @pytest.mark.parametrize("name", [*PROGRAMS, "cam"])
-def test_moves_emitted_in_phases_give_what_the_move_by_move_loop_gives(monkeypatch, comp, name):
+def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name):
     data = cam_program(200).encode() if name == "cam" else (SAMPLES / name).read_bytes()
-    phased = rewrite_source(data, name, comp, RewriteOptions())
-    monkeypatch.setattr(emission_module._Emitter, "_intermediates",
-                        lambda self: _NoPointsButTheLoop())
-    looped = rewrite_source(data, name, comp, RewriteOptions())
-    if phased.points_added == 0:
-        assert phased.data == looped.data
-    assert looped.moves_compensated == phased.moves_compensated
+    columns = rewrite_source(data, name, comp, RewriteOptions())
+    monkeypatch.setattr(emission_module._Emitter, "_columns", False)
+    one_by_one = rewrite_source(data, name, comp, RewriteOptions())
+    assert columns.data == one_by_one.data
+    assert one_by_one.moves_compensated == columns.moves_compensated
+    assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm
 
 
 def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_route():
@@ -190,3 +182,116 @@ def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_rout
                 "[0,0,0,0,0,0]]"]:
         with pytest.raises(NotBulk):
             joint_values([*good[:5], bad, *good[:300]])
+
+
+# ------------------------------------------------------------- the read-back in columns
+def _units(declarations, statements):
+    """Check units with jointtarget declarations (module level of M) and MoveAbsJ
+    statements given as (text before the name, name, text after) in routine p."""
+    from rapidfix.postprocess.reparse_changes import CheckUnits
+
+    units = CheckUnits()
+    units.add_jointtarget_declarations("M", None, declarations)
+    units.add_statements(["M"] * len(statements), ["p"] * len(statements),
+                         ["".join(slot) for slot in statements], statements)
+    return units
+
+
+def _expected(count, joints_deg=None):
+    from rapidfix.postprocess.placement import Placement
+    from rapidfix.postprocess.verify import Expected
+
+    eye = np.repeat(np.eye(4)[None], count, 0)
+    joints = None if joints_deg is None else np.radians(np.asarray(joints_deg, float))
+    # the read-back needs no frames nor conditions
+    return Expected(np.arange(count), np.zeros(count, int), eye, Placement(eye, eye, eye),
+                    None, joints)
+
+
+_DECLS = ["CONST jointtarget jt_a:=[[1,2,3,4,5,6],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
+          "CONST jointtarget jt_b:=[[-1.5,0,.25,10,20,30],[0,0,0,0,0,0]];"]
+_MOVES = [("MoveAbsJ ", "jt_b", ", v100, z1, tool0;"),
+          ("MoveAbsJ\\Conc, ", "JT_A", ", v100, fine, tool0 \\WObj:=w;"),
+          ("MoveAbsJ ", "jt_a", ", v100, z1, tool0;")]
+
+
+def test_moves_made_as_columns_are_read_as_the_full_route_reads_them():
+    from rapidfix.postprocess.verify import _read_columns, read_back, read_back_full
+
+    units, expected = _units(_DECLS, _MOVES), _expected(3)
+    columns = _read_columns(units, expected, "x.mod")
+    assert columns is not None
+    _same_read(columns, read_back_full(units, "x.mod", expected))
+    assert columns.robax.tolist()[:2] == [[-1.5, 0, 0.25, 10, 20, 30], [1, 2, 3, 4, 5, 6]]
+    _same_read(read_back(units, "x.mod", expected), columns)
+
+
+@pytest.mark.parametrize("declarations, moves, message", [
+    ([_DECLS[0].replace("4,5,6]", "4,5]")], _MOVES[2:], "cannot be read back"),
+    ([_DECLS[0].replace("4,5", "4.5.5")], _MOVES[2:], "does not parse"),
+    (_DECLS, [("MoveAbsJ ", "jt_a", ", v100, z1, tool0")], "does not parse"),
+    (_DECLS, [("MoveAbsJ ", "jt_a", " v100, z1, tool0;")], "does not parse"),
+    (_DECLS, [("MoveAbsJ ", "jt_a", ", v100, z1, tool0; MoveAbsJ jt_b, v1, z1, tool0;")],
+     "motion instructions"),
+    (_DECLS, [("MoveAbsJ ", "jt_c", ", v100, z1, tool0;")], "cannot be read back"),
+    ([*_DECLS, _DECLS[0].replace("1,2,3", "3,2,1")], _MOVES, "declares jt_a twice"),
+])
+def test_the_read_back_in_columns_stops_a_broken_statement_declaration_or_name(
+        declarations, moves, message):
+    from rapidfix.postprocess.verify import read_back
+
+    with pytest.raises((RapidSemanticError, ValueError), match=message):
+        read_back(_units(declarations, moves), "x.mod", _expected(len(moves)))
+
+
+def test_a_jointtarget_that_does_not_hold_the_joints_planned_stops_the_read_back():
+    from rapidfix.postprocess.verify import read_back
+
+    planned = [[-1.5, 0, 0.25, 10, 20, 30], [1, 2, 3, 4, 5, 6], [1, 2, 3, 4, 5, 6]]
+    read_back(_units(_DECLS, _MOVES), "x.mod", _expected(3, planned))  # as planned
+    planned[2][5] = 6.000002
+    with pytest.raises(RapidSemanticError, match="other joints than planned"):
+        read_back(_units(_DECLS, _MOVES), "x.mod", _expected(3, planned))
+
+
+def test_a_rewrite_that_writes_a_wrong_digit_or_one_name_twice_writes_nothing(
+        monkeypatch, comp, tmp_path):
+    from rapidfix.postprocess.naming import NameAllocator
+
+    source = tmp_path / "cam.mod"
+    source.write_text(cam_program(40))
+    real = emission_module.jointtarget_literals
+
+    def one_digit_off(q_deg, extax):
+        texts = real(q_deg, extax)
+        return [texts[0].replace("[[", "[[1", 1), *texts[1:]]
+
+    monkeypatch.setattr(emission_module, "jointtarget_literals", one_digit_off)
+    out = tmp_path / "out.mod"
+    with pytest.raises(RapidSemanticError, match="other joints than planned"):
+        rewrite_file(source, out, comp, RewriteOptions())
+    assert not out.exists()
+    monkeypatch.undo()
+    allocate_many = NameAllocator.allocate_many
+    monkeypatch.setattr(NameAllocator, "allocate_many",
+                        lambda self, stems, prefix="jt_": [allocate_many(self, stems, prefix)[0]]
+                        * len(stems))
+    with pytest.raises(RapidSemanticError, match="twice"):
+        rewrite_file(source, out, comp, RewriteOptions())
+    assert not out.exists()
+
+
+def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(
+        monkeypatch, comp):
+    parsed = []
+    real = verify_module.read_targets_in_bulk
+
+    def spy(text, *args):
+        parsed.append(text)
+        return real(text, *args)
+
+    monkeypatch.setattr(verify_module, "read_targets_in_bulk", spy)
+    result = rewrite_source(cam_program(300).encode(), "cam.mod", comp, RewriteOptions())
+    assert result.moves_compensated == 300
+    assert parsed and not any("CONST jointtarget jt_" in text for text in parsed)
+    assert sum(text.count("MoveAbsJ") for text in parsed) < 30  # the distinct texts only
