@@ -389,8 +389,50 @@ class ModelBuilder:
             texts = self.operand_texts[(module, routine, type_hint)] = {}
         known = texts.get(text)
         if known is None:
+            if type(expr) is s.LazyFunctionCall:
+                # `Offs(p7,0,0,10)`: a text that seldom recurs (its first argument changes
+                # from move to move), read in one step and not kept
+                known = self._named_call_fields(expr, type_hint, module, routine)
+                if known is not None:
+                    return Operand(arg, self.source, text, *known)
             known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
         return Operand(arg, self.source, text, *known)
+
+    def _named_call_fields(self, expr: s.LazyFunctionCall, type_hint: str | None, module: str,
+                           routine: str | None) -> tuple | None:
+        """_operand_fields of a function call of a data name and literals (see
+        Evaluator.named_call), or None for any other call. The name is looked up once,
+        for its value and its declaration."""
+        head = expr.head
+        if head is None or type(head.value) is not s.NameRef or not self.settled:
+            return None
+        name_ref = head.value
+        found = self._find(name_ref.name.lower(), module, routine)
+        evaluator = self._evaluator(module, routine)
+        first: object
+        if type(found) is Declaration:  # resolved: what the evaluator's lookup gives
+            if found.static and found.value is not None:
+                first = found.value
+            else:
+                first = NotConstant(f"{found.name}: {found.reason}")
+        else:
+            found = None
+            try:
+                first = evaluator.lookup(name_ref.name)[0]
+            except NotConstant as err:
+                first = err
+        try:
+            typed = evaluator.named_call(expr, first)
+        except NotConstant as err:
+            fields = (None, type_hint, False, err.reason)
+        else:
+            if typed is None:
+                return None
+            fields = self._fitted(*typed, type_hint)
+        key = expr.key
+        if key == "offs" or key == "reltool":
+            return (key, name_ref.name, fields[1], fields[0], fields[2], fields[3], found)
+        return ("expression", None, fields[1], fields[0], fields[2], fields[3], None)
 
     def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,
                         routine: str | None) -> tuple:
@@ -432,6 +474,13 @@ class ModelBuilder:
             return None, type_hint, False, err.reason
         except RecursionError:
             return None, type_hint, False, "expression nested too deeply to evaluate"
+        return self._fitted(value, kind, type_hint)
+
+    @staticmethod
+    def _fitted(value: object, kind: str | None, type_hint: str | None
+                ) -> tuple[object, str | None, bool, str | None]:
+        """(value, type name, static, reason) of an evaluated operand of type `kind`
+        where the instruction takes `type_hint`."""
         type_name = type_hint or kind
         if type_name is not None and type_name != kind and not fits_type(type_name, value):
             try:
