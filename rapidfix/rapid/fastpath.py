@@ -575,29 +575,56 @@ def shared_aggregate_value(text: str, rests: Memo) -> tuple:
 _RESTS: Memo = Memo(TAIL_LIMIT)
 
 
+# A storage keyword as written -> as the grammar gives it ('const' -> 'CONST'): one string
+# object shared by every declaration, not one made per declaration.
+_STORAGES: dict[str, str] = {}
+
+
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
-    """The DataDecl nodes of a FAST_DECLS token starting at offset `base`."""
+    """The DataDecl nodes of a FAST_DECLS token starting at offset `base`.
+
+    The common value, an aggregate of groups `[[x,y,z],[...],...]`, is read here (as
+    shared_aggregate_value reads it: the first group every time, the rest once per
+    distinct text), without a call per declaration."""
     decls: list[s.DataDecl] = []
-    rests = _RESTS
+    append = decls.append
+    rests, storages = _RESTS, _STORAGES
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
         local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:
             init = None
-        elif value[0] == "[" and not _DEEP_START.match(value):
-            at = base + spans[7][0]
-            init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
         else:
-            init = _value_node(value, base + spans[7][0])
+            at = base + spans[7][0]
+            init = None
+            if value.startswith("[["):  # two levels, or three (an array's items)
+                cut = value.find("]")
+                group = value[2:cut]
+                if "[" not in group and value.startswith("],[", cut):
+                    rest = value[cut + 1:]
+                    items = rests.get(rest)
+                    if items is None:
+                        items = aggregate_value("[[0]" + rest)[1:]  # the same after any group
+                        rests.keep(rest, items)
+                    try:  # (a position seldom recurs: not kept)
+                        position = tuple(map(float, group.split(",")))
+                    except ValueError:
+                        raise NotFast(group) from None
+                    init = numeric_aggregate(at, at + len(value), (position, *items))
+            if init is None:
+                init = _value_node(value, at)
         if dims is None:
             sizes: Any = ()
         else:
             at = base + spans[6][0]
             sizes = [_value_node(d.group(), at + d.start()) for d in _INDEX_ITEM.finditer(dims)]
         first = 1 if local is not None else 2 if task is not None else 3
-        decls.append(data_decl(
-            base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
+        upper = storages.get(storage)
+        if upper is None:
+            upper = storages[storage] = storage.upper()
+        append(data_decl(
+            base + spans[first][0], base + spans[0][1], upper, intern(type_name),
             # interned: the moves that name it then hold the same string
             intern(name), base + spans[5][0], sizes, init, local is not None, task is not None,
         ))
