@@ -16,10 +16,11 @@ two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
 offsets and values), so nothing downstream can tell the difference. Values may
 also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
-and whole-line comments may stand between the statements of a run. Anything
-else in a statement — a comment inside it, an expression, a keyword, a string, a
-named or conditional argument, a call inside a call — ends the run, and that
-statement is parsed by the full grammar as before.
+whose required arguments may be such calls themselves, one level deep
+(`Offs(RelTool(p1,0,0,5),0,0,-10)`), and whole-line comments may stand between the
+statements of a run. Anything else in a statement — a comment inside it, an
+expression, a keyword, a string, a named or conditional argument, calls nested
+deeper — ends the run, and that statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -73,10 +74,13 @@ _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # an aggregate (up to three levels), a negated number, a name or a number.
 _SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
                 rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
-# A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
-# (`path{3}`, `grid{i,2}`) or one of them.
-VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*\)|\{{[^{{}}]*\}}))?"
-              rf"|{_SIMPLE_TEXT}")
+# A function call of such values (`Offs(p1,0,0,-10)`).
+_CALL_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)"
+# A value: a function call whose arguments are such values or such calls
+# (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`)
+# or one of them.
+VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*(?:\([^()]*\)[^()]*)*\)"
+              rf"|\{{[^{{}}]*\}}))?|{_SIMPLE_TEXT}")
 
 
 class NotFast(Exception):
@@ -130,17 +134,27 @@ def _patterns() -> dict[str, str]:
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
     # a value: an aggregate, a (negated) number, a name, or a function call whose
-    # arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5
-    # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
-    # written once where it can be: the contextual lexer compiles these patterns into
-    # each of its scanners, at a cost that grows with their length.
+    # arguments are such values (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5 \\Rz:=90)`) or
+    # calls of them (`Offs(RelTool(p,0,0,5),0,0,-10)`); an optional argument's value is
+    # one without a call. Every piece is written once where it can be: the patterns
+    # are compiled when a command first parses, at a cost that grows with their length.
     simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
     optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
     plain_argument = f"(?:{simple}|{optional})"
     # a further argument: after a comma, or an optional one right after the last
     following = rf"(?:,{WS}*|(?=\\))"
-    inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
-             rf"\)")
+
+    def parenthesised(item: str) -> str:
+        # `(item {following item})`, the item written once: the first stands right after
+        # the parenthesis (a lookbehind), each further one after `following` (an item
+        # never ends with a parenthesis, so neither can take the other's place)
+        return rf"\((?:(?:(?<=\(){WS}*|(?<!\(){WS}*{following}){item})*{WS}*\)"
+
+    plain_call = parenthesised(plain_argument)
+    # a call's required arguments may be calls of such values themselves
+    # (`Offs(RelTool(p,0,0,5),0,0,10)`), one level deep
+    call_value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{plain_call})?)"
+    inner = parenthesised(f"(?:{call_value}|{optional})")
     # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
     index_item = f"(?:{number}|{value_name})"
     index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
@@ -277,7 +291,7 @@ def aggregate_value(text: str) -> tuple:
 # argument, a required value or the closing parenthesis.
 _INNER_PIECE = re.compile(
     rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
-    rf"|({_SIMPLE_TEXT})|(\)))"
+    rf"|({_CALL_TEXT}|{_SIMPLE_TEXT})|(\)))"
 )
 _WS_CHARS = " \t\f\v\r\n\x1a"
 
