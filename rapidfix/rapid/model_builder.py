@@ -577,7 +577,7 @@ class ModelBuilder:
         """
         source, module_names, operands = self.source, self.module_names_as_spelt, self._operands
         name_ref, operand, lazy_call, role_types = s.NameRef, Operand, s.LazyCall, _ROLE_TYPES
-        motion = MotionInstruction
+        motion, declaration, global_names = MotionInstruction, Declaration, self.global_names
         # (instruction, module, routine) -> per required position: (parameter key,
         # type hint, operand cache: data name as spelt -> what an Operand of it holds),
         # and id(call tail) -> what its moves share (None: nothing); the calls keep
@@ -603,6 +603,10 @@ class ModelBuilder:
                 layout, shared_tails = found
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
+                # the scopes _find looks a name up in, innermost first
+                routine_scope = self.routine_names.get((module, rkey), _NONE)
+                module_scope = self.module_names.get(module, _NONE)
+                module_name = module_names[module]
             if type(call) is lazy_call:
                 head = call.head
                 # (the same tail after one leading argument or after two is shared apart)
@@ -617,16 +621,32 @@ class ModelBuilder:
                         expr = head.value
                         if type(expr) is name_ref:
                             name = expr.name
-                            # a target name seldom recurs in a CAM program: not kept
-                            cached = head_cache.get(name) or self._name_operand(
-                                expr, head_hint, module, rkey)
-                            targets = [operand(head, source, name, "name", name, *cached)]
+                            cached = head_cache.get(name)
+                            if cached is not None:
+                                targets = [operand(head, source, name, "name", name, *cached)]
+                            else:  # a target name seldom recurs in a CAM program: not kept
+                                key = name.lower()
+                                found = (routine_scope.get(key) or module_scope.get(key)
+                                         or global_names.get(key))
+                                if (type(found) is declaration and found.static
+                                        and found.value is not None
+                                        and (found.type_name == head_hint
+                                             or found.type_name.lower() == head_hint)):
+                                    # a resolved declaration of the instruction's type:
+                                    # what _name_operand gives, without the calls
+                                    targets = [operand(head, source, name, "name", name,
+                                                       head_hint, found.value, True, None,
+                                                       found)]
+                                else:
+                                    targets = [operand(head, source, name, "name", name,
+                                                       *self._name_operand(
+                                                           expr, head_hint, module, rkey))]
                         else:
                             targets = [self._operand(head, head_hint, module, rkey)]
                     else:
                         targets = self._head_operands(call.heads, layout, shared, module,
                                                       rkey)
-                    motions.append(motion(call.name, spec, module_names[module], routine,
+                    motions.append(motion(call.name, spec, module_name, routine,
                                           call, source, targets, in_loop, shared))
                     continue
                 else:
@@ -634,7 +654,7 @@ class ModelBuilder:
             else:
                 arguments, optional = operands(call, layout, module, rkey)
             targets = [arguments[key] for key in spec.target_keys if key in arguments]
-            motions.append(motion(call.name, spec, module_names[module], routine, call,
+            motions.append(motion(call.name, spec, module_name, routine, call,
                                   source, targets, in_loop, shared if type(call) is lazy_call
                                   else None, arguments, optional))
         return motions
