@@ -178,6 +178,27 @@ class Evaluator:
             raise NotConstant(failure)
         return _apply(expr, handler, [first, *required], optional)
 
+    def named_call(self, expr: s.LazyFunctionCall, first: Value | NotConstant
+                   ) -> TypedValue | None:
+        """typed(expr) of a lazily read call whose first argument is a data name and
+        whose tail holds only literals (`Offs(p7,0,0,10)`), given that name's value
+        `first` (or the NotConstant its lookup raised): the same value, or NotConstant
+        with the same reason, in one step. None when the tail is not all literals
+        (then use typed).
+
+        A program with a hundred thousand such calls has as many distinct texts: each
+        needs its own value, but not the layers of the general route."""
+        constants = _constant_tail(expr.tail)
+        if constants is None:
+            return None
+        handler = _handler(expr)
+        if type(first) is NotConstant:
+            raise NotConstant(first.reason)
+        required, optional, failure = constants
+        if failure is not None:
+            raise NotConstant(failure)
+        return _apply(expr, handler, [first, *required], optional)
+
 
 def _handler(expr: s.Call) -> Function:
     """The evaluator of a function call, or NotConstant when it is known only at run time."""

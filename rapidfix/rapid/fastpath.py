@@ -16,10 +16,11 @@ two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
 offsets and values), so nothing downstream can tell the difference. Values may
 also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
-and whole-line comments may stand between the statements of a run. Anything
-else in a statement — a comment inside it, an expression, a keyword, a string, a
-named or conditional argument, a call inside a call — ends the run, and that
-statement is parsed by the full grammar as before.
+whose required arguments may be such calls themselves, one level deep
+(`Offs(RelTool(p1,0,0,5),0,0,-10)`), and whole-line comments may stand between the
+statements of a run. Anything else in a statement — a comment inside it, an
+expression, a keyword, a string, a named or conditional argument, calls nested
+deeper — ends the run, and that statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -73,10 +74,13 @@ _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # an aggregate (up to three levels), a negated number, a name or a number.
 _SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
                 rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
-# A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
-# (`path{3}`, `grid{i,2}`) or one of them.
-VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*\)|\{{[^{{}}]*\}}))?"
-              rf"|{_SIMPLE_TEXT}")
+# A function call of such values (`Offs(p1,0,0,-10)`).
+_CALL_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)"
+# A value: a function call whose arguments are such values or such calls
+# (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`)
+# or one of them.
+VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*(?:\([^()]*\)[^()]*)*\)"
+              rf"|\{{[^{{}}]*\}}))?|{_SIMPLE_TEXT}")
 
 
 class NotFast(Exception):
@@ -130,17 +134,27 @@ def _patterns() -> dict[str, str]:
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
     # a value: an aggregate, a (negated) number, a name, or a function call whose
-    # arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5
-    # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
-    # written once where it can be: the contextual lexer compiles these patterns into
-    # each of its scanners, at a cost that grows with their length.
+    # arguments are such values (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5 \\Rz:=90)`) or
+    # calls of them (`Offs(RelTool(p,0,0,5),0,0,-10)`); an optional argument's value is
+    # one without a call. Every piece is written once where it can be: the patterns
+    # are compiled when a command first parses, at a cost that grows with their length.
     simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
     optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
     plain_argument = f"(?:{simple}|{optional})"
     # a further argument: after a comma, or an optional one right after the last
     following = rf"(?:,{WS}*|(?=\\))"
-    inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
-             rf"\)")
+
+    def parenthesised(item: str) -> str:
+        # `(item {following item})`, the item written once: the first stands right after
+        # the parenthesis (a lookbehind), each further one after `following` (an item
+        # never ends with a parenthesis, so neither can take the other's place)
+        return rf"\((?:(?:(?<=\(){WS}*|(?<!\(){WS}*{following}){item})*{WS}*\)"
+
+    plain_call = parenthesised(plain_argument)
+    # a call's required arguments may be calls of such values themselves
+    # (`Offs(RelTool(p,0,0,5),0,0,10)`), one level deep
+    call_value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{plain_call})?)"
+    inner = parenthesised(f"(?:{call_value}|{optional})")
     # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
     index_item = f"(?:{number}|{value_name})"
     index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
@@ -277,7 +291,7 @@ def aggregate_value(text: str) -> tuple:
 # argument, a required value or the closing parenthesis.
 _INNER_PIECE = re.compile(
     rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
-    rf"|({_SIMPLE_TEXT})|(\)))"
+    rf"|({_CALL_TEXT}|{_SIMPLE_TEXT})|(\)))"
 )
 _WS_CHARS = " \t\f\v\r\n\x1a"
 
@@ -575,29 +589,56 @@ def shared_aggregate_value(text: str, rests: Memo) -> tuple:
 _RESTS: Memo = Memo(TAIL_LIMIT)
 
 
+# A storage keyword as written -> as the grammar gives it ('const' -> 'CONST'): one string
+# object shared by every declaration, not one made per declaration.
+_STORAGES: dict[str, str] = {}
+
+
 def split_decls(text: str, base: int) -> list[s.DataDecl]:
-    """The DataDecl nodes of a FAST_DECLS token starting at offset `base`."""
+    """The DataDecl nodes of a FAST_DECLS token starting at offset `base`.
+
+    The common value, an aggregate of groups `[[x,y,z],[...],...]`, is read here (as
+    shared_aggregate_value reads it: the first group every time, the rest once per
+    distinct text), without a call per declaration."""
     decls: list[s.DataDecl] = []
-    rests = _RESTS
+    append = decls.append
+    rests, storages = _RESTS, _STORAGES
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
     for m in _DECL.finditer(text):
         local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:
             init = None
-        elif value[0] == "[" and not _DEEP_START.match(value):
-            at = base + spans[7][0]
-            init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
         else:
-            init = _value_node(value, base + spans[7][0])
+            at = base + spans[7][0]
+            init = None
+            if value.startswith("[["):  # two levels, or three (an array's items)
+                cut = value.find("]")
+                group = value[2:cut]
+                if "[" not in group and value.startswith("],[", cut):
+                    rest = value[cut + 1:]
+                    items = rests.get(rest)
+                    if items is None:
+                        items = aggregate_value("[[0]" + rest)[1:]  # the same after any group
+                        rests.keep(rest, items)
+                    try:  # (a position seldom recurs: not kept)
+                        position = tuple(map(float, group.split(",")))
+                    except ValueError:
+                        raise NotFast(group) from None
+                    init = numeric_aggregate(at, at + len(value), (position, *items))
+            if init is None:
+                init = _value_node(value, at)
         if dims is None:
             sizes: Any = ()
         else:
             at = base + spans[6][0]
             sizes = [_value_node(d.group(), at + d.start()) for d in _INDEX_ITEM.finditer(dims)]
         first = 1 if local is not None else 2 if task is not None else 3
-        decls.append(data_decl(
-            base + spans[first][0], base + spans[0][1], storage.upper(), intern(type_name),
+        upper = storages.get(storage)
+        if upper is None:
+            upper = storages[storage] = storage.upper()
+        append(data_decl(
+            base + spans[first][0], base + spans[0][1], upper, intern(type_name),
             # interned: the moves that name it then hold the same string
             intern(name), base + spans[5][0], sizes, init, local is not None, task is not None,
         ))

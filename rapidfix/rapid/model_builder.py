@@ -389,8 +389,50 @@ class ModelBuilder:
             texts = self.operand_texts[(module, routine, type_hint)] = {}
         known = texts.get(text)
         if known is None:
+            if type(expr) is s.LazyFunctionCall:
+                # `Offs(p7,0,0,10)`: a text that seldom recurs (its first argument changes
+                # from move to move), read in one step and not kept
+                known = self._named_call_fields(expr, type_hint, module, routine)
+                if known is not None:
+                    return Operand(arg, self.source, text, *known)
             known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
         return Operand(arg, self.source, text, *known)
+
+    def _named_call_fields(self, expr: s.LazyFunctionCall, type_hint: str | None, module: str,
+                           routine: str | None) -> tuple | None:
+        """_operand_fields of a function call of a data name and literals (see
+        Evaluator.named_call), or None for any other call. The name is looked up once,
+        for its value and its declaration."""
+        head = expr.head
+        if head is None or type(head.value) is not s.NameRef or not self.settled:
+            return None
+        name_ref = head.value
+        found = self._find(name_ref.name.lower(), module, routine)
+        evaluator = self._evaluator(module, routine)
+        first: object
+        if type(found) is Declaration:  # resolved: what the evaluator's lookup gives
+            if found.static and found.value is not None:
+                first = found.value
+            else:
+                first = NotConstant(f"{found.name}: {found.reason}")
+        else:
+            found = None
+            try:
+                first = evaluator.lookup(name_ref.name)[0]
+            except NotConstant as err:
+                first = err
+        try:
+            typed = evaluator.named_call(expr, first)
+        except NotConstant as err:
+            fields = (None, type_hint, False, err.reason)
+        else:
+            if typed is None:
+                return None
+            fields = self._fitted(*typed, type_hint)
+        key = expr.key
+        if key == "offs" or key == "reltool":
+            return (key, name_ref.name, fields[1], fields[0], fields[2], fields[3], found)
+        return ("expression", None, fields[1], fields[0], fields[2], fields[3], None)
 
     def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,
                         routine: str | None) -> tuple:
@@ -432,6 +474,13 @@ class ModelBuilder:
             return None, type_hint, False, err.reason
         except RecursionError:
             return None, type_hint, False, "expression nested too deeply to evaluate"
+        return self._fitted(value, kind, type_hint)
+
+    @staticmethod
+    def _fitted(value: object, kind: str | None, type_hint: str | None
+                ) -> tuple[object, str | None, bool, str | None]:
+        """(value, type name, static, reason) of an evaluated operand of type `kind`
+        where the instruction takes `type_hint`."""
         type_name = type_hint or kind
         if type_name is not None and type_name != kind and not fits_type(type_name, value):
             try:
@@ -528,7 +577,7 @@ class ModelBuilder:
         """
         source, module_names, operands = self.source, self.module_names_as_spelt, self._operands
         name_ref, operand, lazy_call, role_types = s.NameRef, Operand, s.LazyCall, _ROLE_TYPES
-        motion = MotionInstruction
+        motion, declaration, global_names = MotionInstruction, Declaration, self.global_names
         # (instruction, module, routine) -> per required position: (parameter key,
         # type hint, operand cache: data name as spelt -> what an Operand of it holds),
         # and id(call tail) -> what its moves share (None: nothing); the calls keep
@@ -554,6 +603,10 @@ class ModelBuilder:
                 layout, shared_tails = found
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
+                # the scopes _find looks a name up in, innermost first
+                routine_scope = self.routine_names.get((module, rkey), _NONE)
+                module_scope = self.module_names.get(module, _NONE)
+                module_name = module_names[module]
             if type(call) is lazy_call:
                 head = call.head
                 # (the same tail after one leading argument or after two is shared apart)
@@ -568,16 +621,32 @@ class ModelBuilder:
                         expr = head.value
                         if type(expr) is name_ref:
                             name = expr.name
-                            # a target name seldom recurs in a CAM program: not kept
-                            cached = head_cache.get(name) or self._name_operand(
-                                expr, head_hint, module, rkey)
-                            targets = [operand(head, source, name, "name", name, *cached)]
+                            cached = head_cache.get(name)
+                            if cached is not None:
+                                targets = [operand(head, source, name, "name", name, *cached)]
+                            else:  # a target name seldom recurs in a CAM program: not kept
+                                key = name.lower()
+                                found = (routine_scope.get(key) or module_scope.get(key)
+                                         or global_names.get(key))
+                                if (type(found) is declaration and found.static
+                                        and found.value is not None
+                                        and (found.type_name == head_hint
+                                             or found.type_name.lower() == head_hint)):
+                                    # a resolved declaration of the instruction's type:
+                                    # what _name_operand gives, without the calls
+                                    targets = [operand(head, source, name, "name", name,
+                                                       head_hint, found.value, True, None,
+                                                       found)]
+                                else:
+                                    targets = [operand(head, source, name, "name", name,
+                                                       *self._name_operand(
+                                                           expr, head_hint, module, rkey))]
                         else:
                             targets = [self._operand(head, head_hint, module, rkey)]
                     else:
                         targets = self._head_operands(call.heads, layout, shared, module,
                                                       rkey)
-                    motions.append(motion(call.name, spec, module_names[module], routine,
+                    motions.append(motion(call.name, spec, module_name, routine,
                                           call, source, targets, in_loop, shared))
                     continue
                 else:
@@ -585,7 +654,7 @@ class ModelBuilder:
             else:
                 arguments, optional = operands(call, layout, module, rkey)
             targets = [arguments[key] for key in spec.target_keys if key in arguments]
-            motions.append(motion(call.name, spec, module_names[module], routine, call,
+            motions.append(motion(call.name, spec, module_name, routine, call,
                                   source, targets, in_loop, shared if type(call) is lazy_call
                                   else None, arguments, optional))
         return motions

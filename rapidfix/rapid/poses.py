@@ -29,6 +29,18 @@ def _mul(a: Quat, b: Quat) -> Quat:
             aw * bz + ax * by - ay * bx + az * bw)
 
 
+def _shared_unit(q: tuple[float, ...]) -> Quat:
+    """_unit(q), worked out once per orientation tuple that many targets share."""
+    known = _UNITS.get(id(q))
+    if known is not None and known[0] is q:
+        return known[1]
+    unit = _unit(q)
+    if len(_UNITS) >= 256:
+        _UNITS.clear()
+    _UNITS[id(q)] = (q, unit)
+    return unit
+
+
 def _unit(q: tuple[float, ...]) -> Quat:
     norm = math.sqrt(sum(v * v for v in q))
     if norm == 0.0 or not math.isfinite(norm):
@@ -60,11 +72,32 @@ def _rotate(q: Quat, v: tuple[float, float, float]) -> tuple[float, float, float
             vz + w * tz + (x * ty - y * tx))
 
 
+# Robtargets of a program mostly share their orientation, confdata and external-axes
+# tuples (the fast path reads them once): the unit quaternion of a shared orientation,
+# and whether a shared confdata is whole, are worked out once, kept with the tuples
+# themselves so that their ids cannot be reused.
+_UNITS: dict[int, tuple[tuple, Quat]] = {}
+_WHOLE_CONF: dict[int, tuple] = {}
+
+
+def _whole(conf: tuple) -> bool:
+    """All of the confdata's numbers whole (the robtarget shape checked already)."""
+    known = _WHOLE_CONF.get(id(conf))
+    if known is not None and known is conf:
+        return True
+    if not all(map(float.is_integer, conf)):
+        return False
+    if len(_WHOLE_CONF) >= 256:
+        _WHOLE_CONF.clear()
+    _WHOLE_CONF[id(conf)] = conf
+    return True
+
+
 def _parts(target: Value) -> tuple[tuple, tuple, tuple, tuple]:
     """(trans, rot, confdata as whole floats, extax) of a robtarget value; raises
     ValueShapeError. A value of the right shape with whole confdata is taken as it
     is (robtargets read from a program usually are)."""
-    if fits_type("robtarget", target) and all(map(float.is_integer, target[2])):
+    if fits_type("robtarget", target) and _whole(target[2]):
         trans, rot, conf, extax = target
         return trans, rot, conf, extax
     rt = to_robtarget(target)
@@ -81,7 +114,7 @@ def reltool(target: Value, dx: float, dy: float, dz: float,
             rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> Value:
     """RelTool(p, dx, dy, dz \\Rx \\Ry \\Rz): displaced and rotated in the tool frame (deg)."""
     trans, rot, conf, extax = _parts(target)
-    unit = _unit(rot)
+    unit = _shared_unit(rot)
     shift = _rotate(unit, (dx, dy, dz))
     moved = (trans[0] + shift[0], trans[1] + shift[1], trans[2] + shift[2])
     if rx == ry == rz == 0.0:

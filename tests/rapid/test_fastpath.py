@@ -15,6 +15,7 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
+from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     TAIL_LIMIT,
     Memo,
@@ -97,6 +98,17 @@ FAST = {
         "Foo -1, - 2.5 \\A:=-3, Abs(-1), f(), g(\\B), h(a \\B:=1, c);",
         "Foo\n  Offs(\r\n p1,\t0,0,\n1), v100;",
     ),
+    "calls of calls": module(
+        f"CONST robtarget p1:={TARGET};",
+        "CONST robtarget q:=Offs(RelTool(p1,0,0,1),0,0,1);",
+        "PROC main()",
+        "  MoveL Offs(RelTool(p1,0,0,0),0,0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "  MoveL Offs( RelTool (p1, 0, 0, 0.75 \\Rz:=2) ,0.75,0,0), v100, z1, t;",
+        "  MoveL RelTool(Offs(p1,1,2,3),0,0,-1\\Rx:=5),v100,z1,t;",
+        "  Foo f(g(), h(\\A), k(1 \\B:=2, [1,2])), -1;",
+        "  MoveC Offs(RelTool(c1,0,0,1),0,1,0), p2, v100, z1, t;",
+        "ENDPROC",
+    ),
     "comments between statements": module(
         "! head", "CONST num a:=1; ! a", "! MoveL p1; CONST num b:=2;", "CONST num c:=3;",
         "PROC main()", "  MoveL p1,v100,z1,tool0; ! to p1", "  ! MoveL p2,v1,z1,t; ;;",
@@ -175,7 +187,7 @@ MIXED = {
         "Foo [ 1, 2 ];", "Foo [[[1]]];", "Foo [1,[2,3]];", "Foo [a, 1];", "Foo Offs(p1, 0, 0, 10);"
     ),
     "calls the fast path leaves to the grammar": routine(
-        "Foo Offs(RelTool(p1,0,0,1),0,0,1);", "Foo f(1+2);", "Foo f(-a);", "Foo f(x:=1);",
+        "Foo f(g(h(1)));", "Foo f(1+2);", "Foo f(-a);", "Foo f(x:=1);",
         "Foo f(\\A?B);", "Foo f(1) + 1;", "Foo -1 * 2;", "Foo f(\"s\");", "Foo --1;",
         "Foo f(TRUE);", "Foo f(NOT a);", "Foo 1 -1;", "Foo f (1);",
     ),
@@ -232,12 +244,14 @@ def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
     assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
-def test_function_calls_and_negated_numbers_are_read_in_runs():
+@pytest.mark.parametrize("name", ["function calls and negated numbers", "calls of calls"])
+def test_function_calls_and_negated_numbers_are_read_in_runs(name):
     from rapidfix.rapid.readback import Run, run_parser
 
-    tree = run_parser().parse(FAST["function calls and negated numbers"])
-    body = tree.modules[0].items[0].body
+    module = run_parser().parse(FAST[name]).modules[0]
+    body = next(item for item in module.items if isinstance(item, s.Routine)).body
     assert body and all(isinstance(item, Run) for item in body)
+    assert all(isinstance(item, (Run, s.Routine)) for item in module.items)
 
 
 def test_comments_between_statements_stay_in_one_run():
@@ -342,6 +356,14 @@ PIECES = [
     "Foo -1, - 2.5 \\A:=Abs(-1);",
     "Foo f(), g(a \\B, [1,2]);",
     "Foo f(g(1));",
+    "Foo f(g(h(1)));",
+    "Foo f(,1);",
+    "Foo f(1,);",
+    "Foo f(g(1,),2);",
+    "Foo f(g(,1));",
+    "Foo f(g(1 2));",
+    "Foo f( g( \\A:=1 , 2 ) \\B);",
+    "MoveL Offs(RelTool(p1,0,0,1 \\Rz:=90),0,0,1),v100,z1,tool0;",
     "Foo f(1)+1;",
     "! MoveL p1,v1,z1,t;\n",
     "Foo; ! x;\nBar;",

@@ -184,3 +184,44 @@ def cam_program(draw: st.DrawFn) -> str:
 def test_random_cam_programs_build_the_same_model(text):
     program = assert_same_model(text)
     assert all(isinstance(m.syntax, s.LazyCall) for m in program.motions)
+
+
+def test_function_calls_of_a_name_read_in_one_step_give_the_general_model():
+    # Offs / RelTool / any function of a data name and literals (Evaluator.named_call):
+    # every kind of name and every refusal gives the plain grammar's operands and reasons
+    text = f"""MODULE M
+  PERS tooldata gun:={TOOL};
+  CONST robtarget p1:={TARGET};
+  VAR robtarget moving:={TARGET};
+  CONST jointtarget j1:=[[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget bent:=[[1,2,3],[1,0,0,0],[0,0.5,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST robtarget flat:=[[1,2,3],[0,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST num dz:=5;
+  PROC r(robtarget given)
+    MoveL Offs(p1,0,0,-1),v100,z1,gun;
+    MoveL RelTool(p1,0,0,1\\Rz:=90),v100,z1,gun;
+    MoveL Offs(moving,0,0,1),v100,z1,gun;
+    MoveL Offs(nowhere,0,0,1),v100,z1,gun;
+    MoveL Offs(given,0,0,1),v100,z1,gun;
+    MoveL Offs(j1,0,0,1),v100,z1,gun;
+    MoveL Offs(bent,0,0,1),v100,z1,gun;
+    MoveL RelTool(flat,0,0,1),v100,z1,gun;
+    MoveL Offs(p1,0,0),v100,z1,gun;
+    MoveL Offs(p1,0,0,dz),v100,z1,gun;
+    MoveL Offs(p1,0,0,-dz),v100,z1,gun;
+    MoveL Shifted(p1,0,0,1),v100,z1,gun;
+    MoveL CRobT(p1,0,0,1),v100,z1,gun;
+    MoveL p1,v100,z1,gun\\WObj:=Pick(p1,1);
+    MoveL RelTool(p1,0,0,1\\Rx:=1.5\\Ry:=-2),v100,z1,gun;
+    MoveL RelTool(p1,0,0,1\\Rz),v100,z1,gun;
+    FOR i FROM 1 TO 2 DO
+      MoveL Offs(i,0,0,1),v100,z1,gun;
+    ENDFOR
+    moving.trans.x:=1;
+  ENDPROC
+ENDMODULE
+"""
+    program = assert_same_model(text)
+    calls = [m.target for m in program.motions if m.target.form in ("offs", "reltool")]
+    assert sum(t.static for t in calls) >= 5 and sum(not t.static for t in calls) >= 5
+    assert any(isinstance(m.syntax.args[0].value, s.LazyFunctionCall) for m in program.motions)
