@@ -42,7 +42,16 @@ from typing import Any
 from lark import Lark, Tree, v_args
 from lark.exceptions import UnexpectedInput
 
+from rapidfix.rapid import fast_expressions
 from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fast_expressions import (
+    PLAIN_VALUE,
+    NotRead,
+    expression_patterns,
+    moved,
+    read_expression,
+)
+from rapidfix.rapid.fast_expressions import VALUE_TEXT as _EXPRESSION_TEXT
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
 from rapidfix.rapid.lexer_patterns import share_large_patterns
 from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
@@ -71,12 +80,11 @@ _DEEP_AGGREGATE = rf"\[{WS}*{_ITEM}(?:{WS}*,{WS}*{_ITEM})*{WS}*\]"
 _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # A value without a call, for splitting a token whose syntax has been checked already:
 # an aggregate (up to three levels), a negated number, a name or a number.
-_SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
-                rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
+# (an expression too: fast_expressions)
+_SIMPLE_TEXT = _EXPRESSION_TEXT
 # A value: a function call of such values (`Offs(p1,0,0,-10)`), an element of an array
 # (`path{3}`, `grid{i,2}`) or one of them.
-VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*\)|\{{[^{{}}]*\}}))?"
-              rf"|{_SIMPLE_TEXT}")
+VALUE_TEXT = _EXPRESSION_TEXT
 
 
 class NotFast(Exception):
@@ -129,25 +137,18 @@ def _patterns() -> dict[str, str]:
     data_name = _name(_keywords_after("MODULE m\nVAR num "))
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
-    # a value: an aggregate, a (negated) number, a name, or a function call whose
-    # arguments are such values without calls (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5
-    # \\Rz:=90)`); an optional argument's value is one without a call. Every piece is
-    # written once where it can be: the contextual lexer compiles these patterns into
-    # each of its scanners, at a cost that grows with their length.
-    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
-    optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
-    plain_argument = f"(?:{simple}|{optional})"
-    # a further argument: after a comma, or an optional one right after the last
-    following = rf"(?:,{WS}*|(?=\\))"
-    inner = (rf"\({WS}*(?:{plain_argument}(?:{WS}*{following}{plain_argument})*{WS}*)?"
-             rf"\)")
+    # a value: an aggregate, a (negated) number, a name, an array element, a function
+    # call, or arithmetic of them (fast_expressions). Every piece is written once where
+    # it can be: the contextual lexer compiles these patterns into each of its scanners,
+    # at a cost that grows with their length.
     # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
     index_item = f"(?:{number}|{value_name})"
     index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
-    value = (f"(?:{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}|(?:-{WS}*)?{number}"
-             f"|{value_name}(?:{WS}*(?:{inner}|{index}))?)")
-    argument = f"(?:{value}|{optional})"
-    call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    expression = expression_patterns(
+        {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
+        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE), index)
+    value = expression["value"]
+    call = f"{call_name}(?:{WS}*{expression['arguments']})?{WS}*;"
     # array dimensions: numbers (`{50}`, `{2,3}`)
     dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
@@ -307,7 +308,13 @@ def _call_node(text: str, start: int) -> s.Call:
 
 def _value_node(text: str, start: int) -> s.Expr:
     """The node the grammar builds for a value the fast terminals take, at `start`: a
-    name, a number, a numeric aggregate, a negated number or a function call."""
+    name, a number, a numeric aggregate, a negated number or a function call; any other
+    (arithmetic, components, aggregates of expressions) from fast_expressions."""
+    if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
+        try:
+            return read_expression(text, start)
+        except NotRead:
+            raise NotFast(text) from None
     end = start + len(text)
     first = text[0]
     if first == "[":
@@ -327,6 +334,8 @@ def _value_node(text: str, start: int) -> s.Expr:
     return s.NameRef(start, end, sys.intern(text))
 
 
+# The aggregates read above without fast_expressions: those of the patterns' loose forms.
+_PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
 # An index of an array element, or a dimension: a number or a name.
 _INDEX_ITEM = re.compile(r"[A-Za-z0-9_.+\-]+")
 
@@ -376,6 +385,8 @@ def _moved(node: Any, shift: int) -> Any:
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
+    if isinstance(node, (s.Binary, s.Component, s.Paren)):
+        return moved(node, shift, _moved)
     return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
 
 
@@ -514,7 +525,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
             head_arg = second_arg = None
         else:
             at = base + m.start(2)
-            if first[0].isalpha() and first[-1] not in ")}":
+            if first.isidentifier():  # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`)
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
@@ -585,7 +596,8 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
         spans = m.regs
         if value is None:
             init = None
-        elif value[0] == "[" and not _DEEP_START.match(value):
+        elif (value[0] == "[" and not _DEEP_START.match(value)
+              and _PLAIN_AGGREGATE.fullmatch(value)):
             at = base + spans[7][0]
             init = numeric_aggregate(at, at + len(value), shared_aggregate_value(value, rests))
         else:
@@ -631,7 +643,8 @@ def cached_extension(grammar: str) -> str:
 
     Working it out needs the plain parser's tables and an interactive parse (about
     0.06 s); a command that checks one small file would spend a fifth of its time on
-    it. The key covers the grammar, this module's source and Lark's version.
+    it. The key covers the grammar, this module's and fast_expressions' sources and
+    Lark's version.
     """
     import os
     import tempfile
@@ -641,7 +654,7 @@ def cached_extension(grammar: str) -> str:
 
     from rapidfix.digest import sha256_bytes
 
-    source = Path(__file__).read_bytes()
+    source = Path(__file__).read_bytes() + Path(fast_expressions.__file__).read_bytes()
     key = sha256_bytes(grammar.encode() + source + lark.__version__.encode())
     user = getattr(os, "getuid", lambda: "user")()
     path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
