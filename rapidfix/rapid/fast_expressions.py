@@ -54,15 +54,14 @@ VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
 
 
 def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: str,
-                        word_end: str, aggregates: tuple[str, str], index: str
-                        ) -> dict[str, str]:
+                        word_end: str, aggregates: tuple[str, str]) -> dict[str, str]:
     """Lexer patterns of the fast terminals' values: `value` (of a procedure call's
     argument or a declaration), `arguments` (a procedure call's argument list, without
     its name and ';'). A function call's arguments are sums of operands (names with
     their components and indices, numbers, signs) and optional arguments; a value may
     also be a sum of such operands, function calls and parenthesised sums, or an
     aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
-    (two levels, three levels); `index`: an array element's braces. `terminals` holds
+    (two levels, three levels). `terminals` holds
     rapid.lark's regular expressions by terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
     if (terminals["NUMBER"], terminals["NUMERIC_AGGREGATE"], spaces) != (
@@ -76,8 +75,11 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # After an operand: an operator and the start of a further operand, or the end.
     follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(])"
               rf"|(?=[,;)}}\]\\]))")
-    postfix = rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
     number = f"(?=[0-9.])(?:{NUMBER})"
+    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
+    index = (rf"\{{{WS}*(?:(?:{number}|{value_name})"
+             rf"(?:{WS}*,{WS}*(?!\}})|{WS}*(?=\}})))+\}}")
+    postfix = rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
     operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix})"
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name or (negated) number, as most are

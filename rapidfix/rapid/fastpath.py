@@ -141,12 +141,9 @@ def _patterns() -> dict[str, str]:
     # call, or arithmetic of them (fast_expressions). Every piece is written once where
     # it can be: the contextual lexer compiles these patterns into each of its scanners,
     # at a cost that grows with their length.
-    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
-    index_item = f"(?:{number}|{value_name})"
-    index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
     expression = expression_patterns(
         {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
-        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE), index)
+        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE))
     value = expression["value"]
     call = f"{call_name}(?:{WS}*{expression['arguments']})?{WS}*;"
     # array dimensions: numbers (`{50}`, `{2,3}`)
