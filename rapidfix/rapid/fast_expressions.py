@@ -76,11 +76,15 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(])"
               rf"|(?=[,;)}}\]\\]))")
     number = f"(?=[0-9.])(?:{NUMBER})"
-    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
-    index = (rf"\{{{WS}*(?:(?:{number}|{value_name})"
-             rf"(?:{WS}*,{WS}*(?!\}})|{WS}*(?=\}})))+\}}")
-    postfix = rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
-    operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix})"
+
+    def postfix(item: str) -> str:
+        """Components and array indices (`.x`, `{i, 2}`) after an operand."""
+        index = rf"\{{{WS}*(?:{item}(?:{WS}*,{WS}*(?!\}})|{WS}*(?=\}})))+\}}"
+        return rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
+
+    # an operand inside a function call or an index: its indices numbers or names
+    leaf = f"(?:{number}|{value_name})"
+    operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix(leaf)})"
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name or (negated) number, as most are
     quick = rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z]){value_name})(?={WS}*[,;)\\])"
@@ -93,7 +97,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     inner = (rf"\({WS}*(?:{argument(f'(?:{loose}|{quick}|{simple})')}"
              rf"(?:{WS}*,{WS}*(?!\))|{WS}*(?=[\\)])))*\)")
     paren = rf"\({WS}*{simple}{WS}*\)"
-    term = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix}|{paren})"
+    term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
+            rf"|{paren})")
     group = rf"\[{WS}*(?:{simple}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
     item = f"(?:{loose}|{group}|{simple})"
     aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
@@ -116,6 +121,7 @@ class NotRead(Exception):
 
 
 _SPACE = re.compile(f"{WS}*")
+_WS_CHARS = frozenset(" \t\f\v\r\n\x1a")
 _NUMBER = re.compile(NUMBER)
 _WORD = re.compile(f"[A-Za-z{_LATIN1}][A-Za-z0-9_{_LATIN1}]*")
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
@@ -134,9 +140,13 @@ class _Reader:
 
     def _skip(self) -> str:
         """The next character after whitespace ('' at the end)."""
-        text = self.text
-        pos = _SPACE.match(text, self.pos).end()
-        self.pos = pos
+        text, pos = self.text, self.pos
+        if pos >= len(text):
+            return ""
+        char = text[pos]
+        if char not in _WS_CHARS:
+            return char
+        pos = self.pos = _SPACE.match(text, pos).end()
         return text[pos] if pos < len(text) else ""
 
     def _expect(self, char: str) -> int:
