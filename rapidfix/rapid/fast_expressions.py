@@ -10,18 +10,22 @@ the grammar's precedence (sum < term < factor < postfix) and left associativity,
 parentheses, numbers, names, array elements `a{i}`, record components `a.b.c`,
 function calls, numeric aggregates and aggregates of expressions.
 
-The lexer's patterns only decide where a run of statements ends; the reader checks
-every token again, as Lark's contextual lexer would cut it (NUMBER and NAME taken
-greedily, `DIV` / `MOD` keywords only where an operator may stand,
-NUMERIC_AGGREGATE tried first at a `[`), and raises NotFast at anything else, so the
-plain grammar then reads the file. A pattern repeats no part of itself: each list
-(of arguments, of operands, of indices, of items) is written once, with a
-look-ahead for what may follow its last element, which keeps the terminals short
-(their compile time is part of every command's start-up).
+The lexer's patterns decide which statements a run takes and check their argument
+lists (fastpath splits those without checking them again). A value that is not one
+fastpath reads itself (PLAIN_VALUE: a name, a (negated) number, a function call, an
+array element of names and numbers) goes to the reader, which checks every token
+again as Lark's contextual lexer would cut it (NUMBER and NAME taken greedily, `DIV`
+/ `MOD` keywords only where an operator may stand, NUMERIC_AGGREGATE tried first at
+a `[`) and raises NotRead (fastpath: NotFast, so the plain grammar reads the file)
+at anything it does not build exactly. A pattern repeats no part of itself where it
+can help it: each list (of arguments, of operands, of indices, of items) is written
+once, with a look-ahead for what may follow its last element, which keeps the
+terminals short (their compile time is part of every command's start-up).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 from collections.abc import Callable
@@ -61,8 +65,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     their components and indices, numbers, signs) and optional arguments; a value may
     also be a sum of such operands, function calls and parenthesised sums, or an
     aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
-    (two levels, three levels). `terminals` holds
-    rapid.lark's regular expressions by terminal name: the reader follows these."""
+    (two levels, three levels). `terminals` holds rapid.lark's regular expressions by
+    terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
     if (terminals["NUMBER"], terminals["NUMERIC_AGGREGATE"], spaces) != (
             NUMBER, NUMERIC_AGGREGATE, set(" \t\f\v\r\n\x1a")):  # pragma: no cover
@@ -301,18 +305,29 @@ def read_expression(text: str, start: int) -> s.Expr:
     return node
 
 
-def moved(node: s.Binary | s.Component | s.Paren, shift: int,
-          move: Callable[[s.Expr, int], s.Expr]) -> s.Expr:
-    """A copy of an operator, component or parenthesis node moved by `shift`, its
-    children moved by `move` (fastpath._moved)."""
+#: the nodes `moved` copies (fastpath._moved the others)
+MOVED_BY_FAST_EXPRESSIONS = (s.NameRef, s.Number, s.Binary, s.Component, s.Paren)
+
+
+def moved(node: s.Expr, shift: int, move: Callable[[s.Expr, int], s.Expr]) -> s.Expr:
+    """A copy of a node of MOVED_BY_FAST_EXPRESSIONS moved by `shift`, its children
+    moved by `move` (fastpath._moved): a shared tail's operands are copied for every
+    call that asks for its arguments."""
+    kind = type(node)
+    if kind is s.NameRef:
+        return s.NameRef(node.start + shift, node.end + shift, node.name)
+    if kind is s.Number:
+        return s.Number(node.start + shift, node.end + shift, node.value, node.text)
     if isinstance(node, s.Binary):
         return s.Binary(node.start + shift, node.end + shift, node.op,
                         move(node.left, shift), move(node.right, shift))
     if isinstance(node, s.Component):
         return s.Component(node.start + shift, node.end + shift, move(node.base, shift),
                            node.name)
-    return s.Paren(node.start + shift, node.end + shift, move(node.inner, shift))
+    if isinstance(node, s.Paren):
+        return s.Paren(node.start + shift, node.end + shift, move(node.inner, shift))
+    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
 
 
-__all__ = ["NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "VALUE_TEXT", "WS", "NotRead",
-           "expression_patterns", "moved", "read_expression"]
+__all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "VALUE_TEXT",
+           "WS", "NotRead", "expression_patterns", "moved", "read_expression"]

@@ -16,10 +16,16 @@ two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
 offsets and values), so nothing downstream can tell the difference. Values may
 also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
-and whole-line comments may stand between the statements of a run. Anything
-else in a statement — a comment inside it, an expression, a keyword, a string, a
-named or conditional argument, a call inside a call — ends the run, and that
-statement is parsed by the full grammar as before.
+and whole-line comments may stand between the statements of a run. Values may
+also be arithmetic (rapidfix.rapid.fast_expressions): signs, `+ - * / DIV MOD`,
+parentheses, record components and array elements (`Offs(pHome,0,0,-nDepth)`,
+`0-rModel.numDiameter/2`, `RelTool(p,0,0,0\\Rz:=-1*nAngle)`, `vWeld{i+1}`), and
+aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those values are read by
+fast_expressions' reader, which follows the grammar's expression rules and gives
+up (NotFast) on anything it does not build exactly. Anything else in a statement
+— a comment inside it, a relation or logical operator, a keyword, a string, a
+named or conditional argument, a call inside a call's arguments — ends the run,
+and that statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -45,6 +51,7 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.rapid import fast_expressions
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import (
+    MOVED_BY_FAST_EXPRESSIONS,
     PLAIN_VALUE,
     NotRead,
     expression_patterns,
@@ -382,7 +389,7 @@ def _moved(node: Any, shift: int) -> Any:
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
-    if isinstance(node, (s.Binary, s.Component, s.Paren)):
+    if isinstance(node, MOVED_BY_FAST_EXPRESSIONS):
         return moved(node, shift, _moved)
     return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
 
