@@ -18,9 +18,15 @@ offsets and values), so nothing downstream can tell the difference. Values may
 also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
 whose required arguments may be such calls themselves, one level deep
 (`Offs(RelTool(p1,0,0,5),0,0,-10)`), and whole-line comments may stand between the
-statements of a run. Anything else in a statement — a comment inside it, an
-expression, a keyword, a string, a named or conditional argument, calls nested
-deeper — ends the run, and that statement is parsed by the full grammar as before.
+statements of a run. Values may also be arithmetic (rapidfix.rapid.fast_expressions):
+signs, `+ - * / DIV MOD`, parentheses, record components and array elements
+(`Offs(pHome,0,0,-nDepth)`, `0-rModel.numDiameter/2`, `RelTool(p,0,0,0\\Rz:=-1*nAngle)`,
+`vWeld{i+1}`), and aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those
+values are read by fast_expressions' reader, which follows the grammar's expression
+rules and gives up (NotFast) on anything it does not build exactly. Anything else in
+a statement — a comment inside it, a relation or logical operator, a keyword, a
+string, a named or conditional argument, calls nested deeper — ends the run, and
+that statement is parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -43,7 +49,17 @@ from typing import Any
 from lark import Lark, Tree, v_args
 from lark.exceptions import UnexpectedInput
 
+from rapidfix.rapid import fast_expressions
 from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fast_expressions import (
+    MOVED_BY_FAST_EXPRESSIONS,
+    PLAIN_VALUE,
+    NotRead,
+    expression_patterns,
+    moved,
+    read_expression,
+)
+from rapidfix.rapid.fast_expressions import VALUE_TEXT as _EXPRESSION_TEXT
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
 from rapidfix.rapid.lexer_patterns import share_large_patterns
 from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
@@ -72,15 +88,14 @@ _DEEP_AGGREGATE = rf"\[{WS}*{_ITEM}(?:{WS}*,{WS}*{_ITEM})*{WS}*\]"
 _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # A value without a call, for splitting a token whose syntax has been checked already:
 # an aggregate (up to three levels), a negated number, a name or a number.
-_SIMPLE_TEXT = (rf"\[[^\[\]]*(?:\[[^\[\]]*(?:\[[^\[\]]*\][^\[\]]*)*\][^\[\]]*)*\]"
-                rf"|-{WS}*[A-Za-z0-9_.+\-]+|[A-Za-z0-9_.+\-]+")
+# (an expression too: fast_expressions)
+_SIMPLE_TEXT = _EXPRESSION_TEXT
 # A function call of such values (`Offs(p1,0,0,-10)`).
 _CALL_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)"
 # A value: a function call whose arguments are such values or such calls
-# (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`)
-# or one of them.
-VALUE_TEXT = (rf"[A-Za-z][A-Za-z0-9_]*(?:{WS}*(?:\([^()]*(?:\([^()]*\)[^()]*)*\)"
-              rf"|\{{[^{{}}]*\}}))?|{_SIMPLE_TEXT}")
+# (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`),
+# arithmetic of them, or one of them.
+VALUE_TEXT = _EXPRESSION_TEXT
 
 
 class NotFast(Exception):
@@ -133,35 +148,15 @@ def _patterns() -> dict[str, str]:
     data_name = _name(_keywords_after("MODULE m\nVAR num "))
     value_name = _name(_keywords_after("MODULE m\nPROC p()\nx "))
     number = f"(?:{terminals['NUMBER'].pattern.to_regexp()})"
-    # a value: an aggregate, a (negated) number, a name, or a function call whose
-    # arguments are such values (`Offs(p1,0,0,-10)`, `RelTool(p,0,0,5 \\Rz:=90)`) or
-    # calls of them (`Offs(RelTool(p,0,0,5),0,0,-10)`); an optional argument's value is
-    # one without a call. Every piece is written once where it can be: the patterns
-    # are compiled when a command first parses, at a cost that grows with their length.
-    simple = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name})"
-    optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{simple})?"
-    plain_argument = f"(?:{simple}|{optional})"
-    # a further argument: after a comma, or an optional one right after the last
-    following = rf"(?:,{WS}*|(?=\\))"
-
-    def parenthesised(item: str) -> str:
-        # `(item {following item})`, the item written once: the first stands right after
-        # the parenthesis (a lookbehind), each further one after `following` (an item
-        # never ends with a parenthesis, so neither can take the other's place)
-        return rf"\((?:(?:(?<=\(){WS}*|(?<!\(){WS}*{following}){item})*{WS}*\)"
-
-    plain_call = parenthesised(plain_argument)
-    # a call's required arguments may be calls of such values themselves
-    # (`Offs(RelTool(p,0,0,5),0,0,10)`), one level deep
-    call_value = f"(?:{_LOOSE_AGGREGATE}|(?:-{WS}*)?{number}|{value_name}(?:{WS}*{plain_call})?)"
-    inner = parenthesised(f"(?:{call_value}|{optional})")
-    # an array element's indices: numbers or names (`path{3}`, `grid{i,2}`)
-    index_item = f"(?:{number}|{value_name})"
-    index = rf"\{{{WS}*{index_item}(?:{WS}*,{WS}*{index_item})*{WS}*\}}"
-    value = (f"(?:{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}|(?:-{WS}*)?{number}"
-             f"|{value_name}(?:{WS}*(?:{inner}|{index}))?)")
-    argument = f"(?:{value}|{optional})"
-    call = f"{call_name}(?:{WS}*{argument}(?:{WS}*{following}{argument})*)?{WS}*;"
+    # a value: an aggregate, a (negated) number, a name, an array element, a function
+    # call, or arithmetic of them (fast_expressions). Every piece is written once where
+    # it can be: the contextual lexer compiles these patterns into each of its scanners,
+    # at a cost that grows with their length.
+    expression = expression_patterns(
+        {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
+        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE))
+    value = expression["value"]
+    call = f"{call_name}(?:{WS}*{expression['arguments']})?{WS}*;"
     # array dimensions: numbers (`{50}`, `{2,3}`)
     dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
@@ -321,7 +316,13 @@ def _call_node(text: str, start: int) -> s.Call:
 
 def _value_node(text: str, start: int) -> s.Expr:
     """The node the grammar builds for a value the fast terminals take, at `start`: a
-    name, a number, a numeric aggregate, a negated number or a function call."""
+    name, a number, a numeric aggregate, a negated number or a function call; any other
+    (arithmetic, components, aggregates of expressions) from fast_expressions."""
+    if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
+        try:
+            return read_expression(text, start)
+        except NotRead:
+            raise NotFast(text) from None
     end = start + len(text)
     first = text[0]
     if first == "[":
@@ -341,6 +342,8 @@ def _value_node(text: str, start: int) -> s.Expr:
     return s.NameRef(start, end, sys.intern(text))
 
 
+# The aggregates read above without fast_expressions: those of the patterns' loose forms.
+_PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
 # An index of an array element, or a dimension: a number or a name.
 _INDEX_ITEM = re.compile(r"[A-Za-z0-9_.+\-]+")
 
@@ -390,6 +393,8 @@ def _moved(node: Any, shift: int) -> Any:
     if isinstance(node, s.Call):
         return s.Call(node.start + shift, node.end + shift, node.name,
                       [_moved(a, shift) for a in node.args])
+    if isinstance(node, MOVED_BY_FAST_EXPRESSIONS):
+        return moved(node, shift, _moved)
     return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
 
 
@@ -528,7 +533,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
             head_arg = second_arg = None
         else:
             at = base + m.start(2)
-            if first[0].isalpha() and first[-1] not in ")}":
+            if first.isidentifier():  # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`)
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)
@@ -612,7 +617,9 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
         else:
             at = base + spans[7][0]
             init = None
-            if value.startswith("[["):  # two levels, or three (an array's items)
+            # two levels, or three (an array's items), of numbers only (an aggregate of
+            # sums, `[[x+1,...],...]`, is fast_expressions' to read)
+            if value.startswith("[[") and _PLAIN_AGGREGATE.fullmatch(value):
                 cut = value.find("]")
                 group = value[2:cut]
                 if "[" not in group and value.startswith("],[", cut):
@@ -672,7 +679,8 @@ def cached_extension(grammar: str) -> str:
 
     Working it out needs the plain parser's tables and an interactive parse (about
     0.06 s); a command that checks one small file would spend a fifth of its time on
-    it. The key covers the grammar, this module's source and Lark's version.
+    it. The key covers the grammar, this module's and fast_expressions' sources and
+    Lark's version.
     """
     import os
     import tempfile
@@ -682,7 +690,7 @@ def cached_extension(grammar: str) -> str:
 
     from rapidfix.digest import sha256_bytes
 
-    source = Path(__file__).read_bytes()
+    source = Path(__file__).read_bytes() + Path(fast_expressions.__file__).read_bytes()
     key = sha256_bytes(grammar.encode() + source + lark.__version__.encode())
     user = getattr(os, "getuid", lambda: "user")()
     path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"

@@ -1,0 +1,341 @@
+"""Arithmetic in the fast path's values: the lexer's patterns and a reader that builds
+exactly the nodes of the plain grammar.
+
+Hand-written programs compute their offsets (`Offs(pHome,0,0,-nDepth)`,
+`0-rModel.numDiameter/2`, `RelTool(p,0,0,0\\Rz:=-1*nAngle)`, `[100+nStep*2,500,5000,1000]`).
+The fast terminals (`fastpath`) take such values through the patterns made here, and
+`read_expression` turns a value's text into the nodes rapid.lark and
+transform.SyntaxBuilder build for it: unary `+` / `-` chains, `+ - * / DIV MOD` with
+the grammar's precedence (sum < term < factor < postfix) and left associativity,
+parentheses, numbers, names, array elements `a{i}`, record components `a.b.c`,
+function calls, numeric aggregates and aggregates of expressions.
+
+The lexer's patterns decide which statements a run takes and check their argument
+lists (fastpath splits those without checking them again). A value that is not one
+fastpath reads itself (PLAIN_VALUE: a name, a (negated) number, a function call, an
+array element of names and numbers) goes to the reader, which checks every token
+again as Lark's contextual lexer would cut it (NUMBER and NAME taken greedily, `DIV`
+/ `MOD` keywords only where an operator may stand, NUMERIC_AGGREGATE tried first at
+a `[`) and raises NotRead (fastpath: NotFast, so the plain grammar reads the file)
+at anything it does not build exactly. A pattern repeats no part of itself where it
+can help it: each list (of arguments, of operands, of indices, of items) is written
+once, with a look-ahead for what may follow its last element, which keeps the
+terminals short (their compile time is part of every command's start-up).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import sys
+from collections.abc import Callable
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.transform import number_value, numeric_aggregate_value
+
+# The grammar's WHITESPACE, NUMBER and NUMERIC_AGGREGATE (checked against rapid.lark
+# by expression_patterns, whenever the fast terminals are made).
+WS = r"[ \t\f\v\r\n\x1a]"
+NUMBER = r"0[xX][0-9a-fA-F]+|0[bB][01]+|0[oO][0-7]+|(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+_N = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
+                     rf"(?:\s*,\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\]))*\s*\]")
+_LATIN1 = "\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+
+
+def _nested(open_: str, close: str) -> str:
+    """A bracketed group up to three levels deep (its inside not checked)."""
+    o, c = re.escape(open_), re.escape(close)
+    other = f"[^{o}{c}]*"
+    return rf"{o}{other}(?:{o}{other}(?:{o}{other}{c}{other})*{c}{other})*{c}"
+
+
+# A value in text the lexer has checked: pieces without whitespace or separators,
+# and bracketed groups, with whitespace between them (but not after the last).
+_CHUNK = (rf"(?:[^,;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}|{_nested('[', ']')}"
+          rf"|{_nested('{', '}')})")
+VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
+
+
+def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: str,
+                        word_end: str, aggregates: tuple[str, str]) -> dict[str, str]:
+    """Lexer patterns of the fast terminals' values: `value` (of a procedure call's
+    argument or a declaration), `arguments` (a procedure call's argument list, without
+    its name and ';'). A function call's arguments are sums of operands (names with
+    their components and indices, numbers, signs), calls of such sums (one level deep)
+    and optional arguments; a value may
+    also be a sum of such operands, function calls and parenthesised sums, or an
+    aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
+    (two levels, three levels). `terminals` holds rapid.lark's regular expressions by
+    terminal name: the reader follows these."""
+    spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
+    if (terminals["NUMBER"], terminals["NUMERIC_AGGREGATE"], spaces) != (
+            NUMBER, NUMERIC_AGGREGATE, set(" \t\f\v\r\n\x1a")):  # pragma: no cover
+        raise ValueError("rapid.lark's numbers or whitespace changed; update fast_expressions")
+    loose, deep = aggregates
+    signs = r"(?:[-+][-+ \t\f\v\r\n\x1a]*)?"
+    # Each list below is written once: an element, then its separator or a look at what
+    # ends the list. Look-aheads on the next character spare the regular expression
+    # engine the alternatives that cannot match (most values are single names).
+    # After an operand: an operator and the start of a further operand, or the end.
+    follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(])"
+              rf"|(?=[,;)}}\]\\]))")
+    number = f"(?=[0-9.])(?:{NUMBER})"
+
+    def postfix(item: str) -> str:
+        """Components and array indices (`.x`, `{i, 2}`) after an operand."""
+        index = rf"\{{{WS}*(?:{item}(?:{WS}*,{WS}*(?!\}})|{WS}*(?=\}})))+\}}"
+        return rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
+
+    # an operand inside a function call or an index: its indices numbers or names
+    leaf = f"(?:{number}|{value_name})"
+    operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix(leaf)})"
+    simple = rf"(?:{operand}{follow})+"
+    # first tried: a value that is a single name or (negated) number, as most are
+    quick = rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z]){value_name})(?={WS}*[,;)\\])"
+
+    def argument(value: str) -> str:
+        """`\\Name:=` or nothing before a value, or a switch `\\Name`."""
+        return (rf"(?:(?:\\{WS}*{plain_name}{WS}*:={WS}*|(?!\\)){value}"
+                rf"|\\{WS}*{plain_name}(?!{WS}*:=))")
+
+    def call_list(item: str) -> str:
+        """A function call's parenthesised arguments, each `item` or an optional one."""
+        return (rf"\({WS}*(?:{argument(item)}"
+                rf"(?:{WS}*,{WS}*(?!\))|{WS}*(?=[\\)])))*\)")
+
+    # a function call's arguments may be calls of sums themselves, one level deep
+    # (`Offs(RelTool(p,0,0,5),0,0,-nLift)`)
+    nested = rf"(?=[A-Za-z]){value_name}{WS}*{call_list(f'(?:{loose}|{quick}|{simple})')}"
+    inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{quick}|{simple})")
+    paren = rf"\({WS}*{simple}{WS}*\)"
+    term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
+            rf"|{paren})")
+    group = rf"\[{WS}*(?:{simple}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
+    item = f"(?:{loose}|{group}|{simple})"
+    aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
+    value = f"(?:(?=\\[)(?:{loose}|{deep}|{aggregate})|{quick}|(?:{term}{follow})+)"
+    arguments = rf"(?:{argument(value)}(?:{WS}*,{WS}*(?!;)|{WS}*(?=[\\;])))+"
+    return {"value": value, "arguments": arguments}
+
+
+# What the reader takes without reading it again: the values fastpath reads itself
+# (a name, a (negated) number, a call or an array element of names and numbers).
+_NAME = "[A-Za-z][A-Za-z0-9_]*"
+_INDEX_ITEM = f"(?:{NUMBER}|{_NAME})"
+PLAIN_VALUE = re.compile(
+    rf"(?:-{WS}*)?(?:{NUMBER})|{_NAME}(?:{WS}*(?:{_nested('(', ')')}"
+    rf"|\{{{WS}*{_INDEX_ITEM}(?:{WS}*,{WS}*{_INDEX_ITEM})*{WS}*\}}))?")
+
+
+class NotRead(Exception):
+    """The text is not an expression the reader builds exactly (fastpath: NotFast)."""
+
+
+_SPACE = re.compile(f"{WS}*")
+_WS_CHARS = frozenset(" \t\f\v\r\n\x1a")
+_NUMBER = re.compile(NUMBER)
+_WORD = re.compile(f"[A-Za-z{_LATIN1}][A-Za-z0-9_{_LATIN1}]*")
+_AGGREGATE = re.compile(NUMERIC_AGGREGATE)
+_OPERAND_KEYWORDS = frozenset(("TRUE", "FALSE", "NOT"))
+_SUM = frozenset("+-")
+_PRODUCT = frozenset("*/")
+
+
+class _Reader:
+    """Recursive descent over one value's text, following rapid.lark's expression rules."""
+
+    __slots__ = ("base", "pos", "text")
+
+    def __init__(self, text: str, base: int) -> None:
+        self.text, self.base, self.pos = text, base, 0
+
+    def _skip(self) -> str:
+        """The next character after whitespace ('' at the end)."""
+        text, pos = self.text, self.pos
+        if pos >= len(text):
+            return ""
+        char = text[pos]
+        if char not in _WS_CHARS:
+            return char
+        pos = self.pos = _SPACE.match(text, pos).end()
+        return text[pos] if pos < len(text) else ""
+
+    def _expect(self, char: str) -> int:
+        if self._skip() != char:
+            raise NotRead(self.text)
+        self.pos += 1
+        return self.base + self.pos
+
+    def _operator(self, ops: frozenset[str], words: tuple[str, ...]) -> tuple[str, int] | None:
+        """The operator of `ops` (or keyword of `words`) at the next token, or None."""
+        char = self._skip()
+        if char in ops:
+            return char, 1
+        if words and char.isalpha():
+            word = _WORD.match(self.text, self.pos)
+            if word is not None and word.group().upper() in words:
+                return word.group().upper(), word.end() - word.start()
+        return None
+
+    def expression(self) -> s.Expr:
+        left = self.term()
+        while (op := self._operator(_SUM, ())) is not None:
+            self.pos += op[1]
+            right = self.term()
+            left = s.Binary(left.start, right.end, op[0], left, right)
+        return left
+
+    def term(self) -> s.Expr:
+        left = self.factor()
+        while (op := self._operator(_PRODUCT, ("DIV", "MOD"))) is not None:
+            self.pos += op[1]
+            right = self.factor()
+            left = s.Binary(left.start, right.end, op[0], left, right)
+        return left
+
+    def factor(self) -> s.Expr:
+        char = self._skip()
+        if char in _SUM and char:
+            at = self.base + self.pos
+            self.pos += 1
+            operand = self.factor()
+            return s.Unary(at, operand.end, char, operand)
+        return self.postfix()
+
+    def postfix(self) -> s.Expr:
+        node = self.atom()
+        while True:
+            char = self._skip()
+            if char == "{":
+                self.pos += 1
+                indices = [self.expression()]
+                while self._skip() == ",":
+                    self.pos += 1
+                    indices.append(self.expression())
+                node = s.Index(node.start, self._expect("}"), node, indices)
+            elif char == ".":
+                self.pos += 1
+                self._skip()
+                word = _WORD.match(self.text, self.pos)
+                if word is None:
+                    raise NotRead(self.text)
+                self.pos = word.end()
+                node = s.Component(node.start, self.base + self.pos, node, word.group())
+            else:
+                return node
+
+    def atom(self) -> s.Expr:
+        char = self._skip()
+        text, pos, base = self.text, self.pos, self.base
+        if char.isdigit() or char == ".":
+            m = _NUMBER.match(text, pos)
+            if m is None:
+                raise NotRead(text)
+            self.pos = m.end()
+            return s.Number(base + pos, base + m.end(), number_value(m.group()), m.group())
+        if char == "(":
+            self.pos += 1
+            inner = self.expression()
+            return s.Paren(base + pos, self._expect(")"), inner)
+        if char == "[":
+            m = _AGGREGATE.match(text, pos)
+            if m is not None:  # Lark's NUMERIC_AGGREGATE, tried before the bracket
+                self.pos = m.end()
+                return s.NumericAggregate(base + pos, base + m.end(),
+                                          numeric_aggregate_value(m.group()))
+            self.pos += 1
+            items = [self.expression()]
+            while self._skip() == ",":
+                self.pos += 1
+                items.append(self.expression())
+            return s.Aggregate(base + pos, self._expect("]"), items)
+        word = _WORD.match(text, pos) if char else None
+        if word is None or word.group().upper() in _OPERAND_KEYWORDS:
+            raise NotRead(text)
+        self.pos = word.end()
+        name = sys.intern(word.group())
+        if self._skip() == "(":
+            return self.call(name, base + pos)
+        return s.NameRef(base + pos, base + word.end(), name)
+
+    def call(self, name: str, start: int) -> s.Call:
+        """A function call whose name stands at `start`, at its '('."""
+        self.pos += 1
+        args: list[s.Argument] = []
+        if self._skip() != ")":
+            args.append(self.argument(True))
+            while True:
+                char = self._skip()
+                if char == ",":
+                    self.pos += 1
+                    args.append(self.argument(True))
+                elif char == "\\":
+                    args.append(self.argument(False))
+                else:
+                    break
+        return s.Call(start, self._expect(")"), name, args)
+
+    def argument(self, required: bool) -> s.Argument:
+        """An argument (`required`: a value may stand here, else only an optional one)."""
+        if self._skip() == "\\":
+            at = self.base + self.pos
+            self.pos += 1
+            self._skip()
+            word = _WORD.match(self.text, self.pos)
+            if word is None:
+                raise NotRead(self.text)
+            self.pos = word.end()
+            end = self.base + self.pos
+            value = None
+            if self._skip() == ":" and self.text.startswith(":=", self.pos):
+                self.pos += 2
+                value = self.expression()
+                end = value.end
+            elif self.text.startswith("?", self.pos):
+                raise NotRead(self.text)  # a conditional argument: the grammar reads it
+            return s.Argument(at, end, "optional", word.group(), value)
+        if not required:
+            raise NotRead(self.text)
+        value = self.expression()
+        if self._skip() == ":":  # a named required argument: the grammar reads it
+            raise NotRead(self.text)
+        return s.Argument(value.start, value.end, "required", None, value)
+
+
+def read_expression(text: str, start: int) -> s.Expr:
+    """The node rapid.lark builds for the value `text` standing at offset `start`;
+    NotRead when it is not such a value, exactly and whole."""
+    reader = _Reader(text, start)
+    node = reader.expression()
+    if reader._skip():
+        raise NotRead(text)
+    return node
+
+
+#: the nodes `moved` copies (fastpath._moved the others)
+MOVED_BY_FAST_EXPRESSIONS = (s.NameRef, s.Number, s.Binary, s.Component, s.Paren)
+
+
+def moved(node: s.Expr, shift: int, move: Callable[[s.Expr, int], s.Expr]) -> s.Expr:
+    """A copy of a node of MOVED_BY_FAST_EXPRESSIONS moved by `shift`, its children
+    moved by `move` (fastpath._moved): a shared tail's operands are copied for every
+    call that asks for its arguments."""
+    kind = type(node)
+    if kind is s.NameRef:
+        return s.NameRef(node.start + shift, node.end + shift, node.name)
+    if kind is s.Number:
+        return s.Number(node.start + shift, node.end + shift, node.value, node.text)
+    if isinstance(node, s.Binary):
+        return s.Binary(node.start + shift, node.end + shift, node.op,
+                        move(node.left, shift), move(node.right, shift))
+    if isinstance(node, s.Component):
+        return s.Component(node.start + shift, node.end + shift, move(node.base, shift),
+                           node.name)
+    if isinstance(node, s.Paren):
+        return s.Paren(node.start + shift, node.end + shift, move(node.inner, shift))
+    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
+
+
+__all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "VALUE_TEXT",
+           "WS", "NotRead", "expression_patterns", "moved", "read_expression"]

@@ -1,0 +1,198 @@
+"""Arithmetic in the fast path's values (rapidfix.rapid.fast_expressions): the fast
+route builds exactly the plain grammar's syntax tree and program model.
+
+Every comparison parses the same text with rapid.lark alone and with the fast
+terminals, and compares the trees node by node (types, offsets, values, operator
+precedence and associativity come out in the node structure).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from lark.exceptions import UnexpectedInput
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from test_fastpath import module, plain_tree, routine, shape
+from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fast_expressions import NotRead, read_expression
+from rapidfix.rapid.fastpath import NotFast, fast_parser, parse_text
+from rapidfix.rapid.grammar import rapid_parser
+
+# Statements the fast terminals take whole (each becomes a call of a fast run).
+READ_FAST = [
+    "MoveL Offs(p1,nStep,0,0),v100,z1,tool0\\WObj:=wPlate;",
+    "MoveL Offs(p1,-nStep,0,0),v100,z1,tool0;",
+    "MoveL Offs(p1,nStep*2,0,-1),v100,z1,tool0;",
+    "MoveL Offs(pHome,0,0,-nDepth),v100,z1,tool0;",
+    "MoveL Offs(robtPBCenter,0-rModel.numDiameter/2,0,0),speedAir,fine,tWeld\\WObj:=wobj1;",
+    "MoveJ RelTool(p,0,0,0\\Rz:=-1*nAngle), v1000, z100, tool0;",
+    "MoveL Offs(Pinit, -h*0.15, -l*0.3, 0), v200,fine,Fibron\\WObj:=vidrio;",
+    "ArcL Welds2{35}.position,vWeld{35},seam,wd35,\\Weave:=weave35,fine,tWeld2;",
+    "Foo nBreakPoint{1}, rec.field.sub, a{i}.b{2}.c;",
+    "Foo a DIV b, a div b MOD 2, 2DIV 3, a - - 1, +a, a*-1, -a*b, --1, - +1;",
+    "Foo (a+b)*2, (1), 1e5*2, 1.e-3+.5, 2E+09-0x1F, 0b101*0o17;",
+    "Foo div, mod, a + div, Step*2, a.Div;",
+    "EOffsSet [Shift_Track+nShift_x,0,0,0,0,0];",
+    "MoveL p1,[100+nStep*2,500,5000,1000],z1,tool0;",
+    "Foo [[1,2],[a]], [[x-1,y+0*n,z],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "Foo [ 1 , 2 ], [0x10], [inf, 1], [1, - 2], [[1,[2]],5];",
+    "Waittime(0.5);",
+    "Foo f(1)+1, Abs(a-b)*2, f (a), g(a \\B:=c*2, -d);",
+    "Foo a\\B:=c+1 \\C, d \\E:=f.g;",
+    "rBoren 5735-2.5+1,0,0,0;",
+]
+
+
+@pytest.mark.parametrize("statement", READ_FAST)
+def test_expression_arguments_are_read_in_runs_to_the_plain_tree(statement):
+    text = routine("Stop;", statement, "Stop;")
+    tree = fast_parser().parse(text)
+    body = tree.modules[0].items[0].body
+    assert all(isinstance(item, s.LazyCall) for item in body)  # all three from one run
+    assert shape(tree) == plain_tree(text)
+
+
+DECLARATIONS = module(
+    "CONST num nStep:=0.5;", "CONST num nLift:=2*nStep;", "CONST num nHalf:=nStep/2;",
+    "VAR num b := -nStep*(2+nLift) DIV 3;", "PERS num c:=rec.a{2}.b;",
+    "CONST robtarget p:=[[10-1,20+0*nStep,30],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST speeddata v:=[100+nStep*2,500,5000,1000];",
+)
+
+
+def test_declarations_with_expressions_parse_to_the_plain_tree():
+    tree = fast_parser().parse(DECLARATIONS)
+    assert shape(tree) == plain_tree(DECLARATIONS)
+
+
+def test_moves_with_expressions_build_the_plain_model():
+    lines = [f"  PERS tooldata tMill:={TOOL};", f"  PERS wobjdata wPlate:={WOBJ};",
+             "  CONST num nStep:=0.5;", "  CONST num nHalf:=nStep/2;",
+             "  VAR num k:=2;", "  CONST num arr{3}:=[1,2,3];"]
+    lines += [f"  CONST robtarget p{i}:={TARGET};" for i in range(4)]
+    moves = [
+        "MoveL Offs(p0,nStep,0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p1,-nStep,0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p2,nStep*2,0,-1),[100+nStep*2,500,5000,1000],z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p3,nStep-nHalf*2,0,-k DIV 2+arr{k}),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL RelTool(p0,0,0,(nStep+1)*2\\Rz:=-1*nStep),v100,z1,tMill;",
+        "MoveL Offs(p1,wPlate.uframe.trans.x/2,0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p2,nStep,0,0),v100,z1,tMill\\WObj:=wPlate;",
+    ]
+    text = "\n".join(["MODULE M", *lines, "  PROC main()", *("    " + m for m in moves),
+                      "  ENDPROC", "ENDMODULE", ""])
+    program = assert_same_model(text)
+    assert len(program.motions) == len(moves)
+    assert sum(m.target.static for m in program.motions) >= 6
+
+
+@pytest.mark.parametrize("text", ["a AND b", "a <> b", "TRUE", "a+NOT b", "f(x:=1)",
+                                  "f(\\A?B)", "0x1DIV 2", "a b", "a.5", '"s"', "(a", "a)"])
+def test_the_reader_gives_up_on_what_it_does_not_build(text):
+    with pytest.raises(NotRead):
+        read_expression(text, 0)
+
+
+def test_an_aggregate_of_numbers_with_arithmetic_is_left_to_the_grammar():
+    # the loose aggregate pattern takes [1-1,2], whose numbers float() refuses
+    text = routine("Foo [1-1,2];")
+    with pytest.raises(NotFast):
+        fast_parser().parse(text)
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+# ---------------------------------------------------------------- random expressions
+NAMES = ["a", "nStep", "p1", "Div", "MODx", "x_2", "Step", "e", "E5", "divide"]
+KEYWORDS = ["DIV", "MOD", "div", "NOT", "AND", "OR", "XOR", "TRUE", "FALSE"]
+NUMBERS = ["0", "1", "2.5", ".5", "7.", "1e5", "1E-3", "2.5e+2", "9E+09", "0x1F", "0b101",
+           "0o17", "1.e3"]
+SPACE = st.sampled_from(["", "", "", " ", "  ", "\n", "\t"])
+
+
+@st.composite
+def expression(draw: st.DrawFn, depth: int = 0) -> str:
+    """Text of an expression: mostly valid RAPID arithmetic, sometimes not (a keyword
+    as an operand, a missing operand), so that both routes must agree on refusing too."""
+    sp = lambda: draw(SPACE)  # noqa: E731
+    kinds = ["name", "number", "name", "number", "keyword"]
+    if depth < 3:
+        kinds += ["binary", "binary", "binary", "unary", "paren", "index", "component",
+                  "call", "aggregate"]
+    kind = draw(st.sampled_from(kinds))
+    if kind == "name":
+        return draw(st.sampled_from(NAMES))
+    if kind == "number":
+        return draw(st.sampled_from(NUMBERS))
+    if kind == "keyword":
+        return draw(st.sampled_from(KEYWORDS))
+    sub = lambda: draw(expression(depth + 1))  # noqa: E731
+    if kind == "binary":
+        op = draw(st.sampled_from(["+", "-", "*", "/", " DIV ", " MOD ", " div ", "DIV", " AND "]))
+        return f"{sub()}{sp()}{op}{sp()}{sub()}"
+    if kind == "unary":
+        return f"{draw(st.sampled_from(['-', '+']))}{sp()}{sub()}"
+    if kind == "paren":
+        return f"({sp()}{sub()}{sp()})"
+    if kind == "index":
+        items = draw(st.lists(expression(depth + 1), min_size=1, max_size=2))
+        return f"{draw(st.sampled_from(NAMES))}{sp()}{{{f',{sp()}'.join(items)}}}"
+    if kind == "component":
+        base = draw(st.sampled_from([*NAMES, "a{1}", "f(1)"]))
+        return f"{base}{sp()}.{sp()}{draw(st.sampled_from([*NAMES, 'Div', 'TRUE']))}"
+    if kind == "call":
+        args = draw(st.lists(expression(depth + 1), max_size=3))
+        option = draw(st.sampled_from(["", " \\Rz:=" + sub(), "\\Sw"]))
+        return f"{draw(st.sampled_from(['Offs', 'Abs', 'f']))}({','.join(args)}{option})"
+    items = draw(st.lists(expression(depth + 1), min_size=1, max_size=3))
+    return f"[{sp()}{f',{sp()}'.join(items)}{sp()}]"
+
+
+@st.composite
+def program_with_expressions(draw: st.DrawFn) -> str:
+    values = draw(st.lists(expression(), min_size=1, max_size=4))
+    statements = [
+        f"MoveL Offs(p1,{values[0]},0,0),v100,z1,tool0;",
+        f"Foo {', '.join(values)};",
+        f"Foo a \\A:={values[-1]}, b;",
+        f"MoveL p1,v100,z1,tool0\\WObj:={values[0]};",
+    ]
+    body = draw(st.lists(st.sampled_from(statements), min_size=1, max_size=4))
+    decl = f"VAR num n:={values[-1]};"
+    return module(decl, "PROC main()", "  Stop;", *("  " + b for b in body), "ENDPROC")
+
+
+@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(program_with_expressions())
+def test_random_expressions_parse_as_with_the_plain_grammar(text):
+    try:
+        expected = plain_tree(text)
+    except UnexpectedInput:
+        with pytest.raises(UnexpectedInput):
+            parse_text(text)
+        return
+    assert shape(parse_text(text)) == expected
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(expression())
+def test_the_reader_builds_the_grammars_expression_or_gives_up(text):
+    # the reader alone, on text no lexer pattern has checked
+    try:
+        expected = plain_tree(routine(f"Foo {text};"))
+    except UnexpectedInput:
+        expected = None
+    start = len("MODULE M\nPROC main()\n  Foo ")
+    try:
+        node = read_expression(text, start)
+    except NotRead:
+        return  # left to the grammar
+    assert expected is not None, text
+    call = rapid_parser().parse(routine(f"Foo {text};")).modules[0].items[0].body[0]
+    assert len(call.args) == 1 and shape(node) == shape(call.args[0].value)
