@@ -56,6 +56,7 @@ from rapidfix.rapid.fastpath import (
 )
 from rapidfix.rapid.grammar import grammar_text
 from rapidfix.rapid.instructions import motion_spec
+from rapidfix.rapid.lexer_patterns import share_large_patterns
 from rapidfix.rapid.scope import find_visible, visible_names
 from rapidfix.rapid.values import fits_type
 
@@ -89,8 +90,9 @@ class _RunBuilder(FastSyntaxBuilder):
 def run_parser() -> Lark:
     """The fast parser (grammar and fast terminals), building `Run` nodes for runs."""
     grammar = grammar_text()
-    return Lark(grammar + cached_extension(grammar), parser="lalr", lexer="contextual",
-                transformer=_RunBuilder(), cache=True)
+    return share_large_patterns(Lark(grammar + cached_extension(grammar), parser="lalr",
+                                     lexer="contextual", transformer=_RunBuilder(),
+                                     cache=True))
 
 
 # A declaration's type, name and value text (the storage and LOCAL / TASK are not

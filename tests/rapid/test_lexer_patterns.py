@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from lark import Lark
 
 from rapidfix.rapid.fastpath import FastSyntaxBuilder, cached_extension, fast_parser
 from rapidfix.rapid.grammar import grammar_text
 from rapidfix.rapid.lexer_patterns import LARGE_PATTERN
+from rapidfix.rapid.readback import run_parser
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
@@ -18,8 +20,9 @@ def _scanners(parser: Lark) -> list:
     return [s._scanner for s in lexer.lexers.values() if s._scanner is not None]
 
 
-def test_each_large_pattern_is_one_compiled_expression_in_every_state():
-    parser = fast_parser()
+@pytest.mark.parametrize("make", [fast_parser, run_parser], ids=["parse", "read-back"])
+def test_each_large_pattern_is_one_compiled_expression_in_every_state(make):
+    parser = make()
     for sample in sorted(SAMPLES.glob("*.mod")):
         parser.parse(sample.read_text(encoding="utf-8", errors="replace"))
     by_terminal: dict[str, set[int]] = {}
