@@ -47,6 +47,10 @@ READ_FAST = [
     "Foo f(1)+1, Abs(a-b)*2, f (a), g(a \\B:=c*2, -d);",
     "Foo a\\B:=c+1 \\C, d \\E:=f.g;",
     "rBoren 5735-2.5+1,0,0,0;",
+    # calls of calls (one level deep) holding sums
+    "MoveL Offs(RelTool(p1,0,0,-nStep),nStep*2,0,-1),v100,z1,tool0;",
+    "MoveL RelTool(Offs(p, a.b{1}, -1*c, 0), 0, 0, 0\\Rz:=-n), v100, fine, tool0;",
+    "MoveC Offs(RelTool(p1,0,-d,0),0,0,h/2), Offs(p2,0,0,-h), v100, z1, tool0;",
 ]
 
 
@@ -85,12 +89,13 @@ def test_moves_with_expressions_build_the_plain_model():
         "MoveL RelTool(p0,0,0,(nStep+1)*2\\Rz:=-1*nStep),v100,z1,tMill;",
         "MoveL Offs(p1,wPlate.uframe.trans.x/2,0,0),v100,z1,tMill\\WObj:=wPlate;",
         "MoveL Offs(p2,nStep,0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(RelTool(p3,0,0,-nStep),nStep*2,0,-1),v100,z1,tMill\\WObj:=wPlate;",
     ]
     text = "\n".join(["MODULE M", *lines, "  PROC main()", *("    " + m for m in moves),
                       "  ENDPROC", "ENDMODULE", ""])
     program = assert_same_model(text)
     assert len(program.motions) == len(moves)
-    assert sum(m.target.static for m in program.motions) >= 6
+    assert sum(m.target.static for m in program.motions) >= 7
 
 
 @pytest.mark.parametrize("text", ["a AND b", "a <> b", "TRUE", "a+NOT b", "f(x:=1)",
