@@ -178,21 +178,21 @@ class _Reader:
                 return word.group().upper(), word.end() - word.start()
         return None
 
-    def expression(self) -> s.Expr:
-        left = self.term()
-        while (op := self._operator(_SUM, ())) is not None:
+    def _chain(self, operand: Callable[[], s.Expr], ops: frozenset[str],
+               words: tuple[str, ...]) -> s.Expr:
+        """Operands joined by left-associative operators of one precedence level."""
+        left = operand()
+        while (op := self._operator(ops, words)) is not None:
             self.pos += op[1]
-            right = self.term()
+            right = operand()
             left = s.Binary(left.start, right.end, op[0], left, right)
         return left
 
+    def expression(self) -> s.Expr:
+        return self._chain(self.term, _SUM, ())
+
     def term(self) -> s.Expr:
-        left = self.factor()
-        while (op := self._operator(_PRODUCT, ("DIV", "MOD"))) is not None:
-            self.pos += op[1]
-            right = self.factor()
-            left = s.Binary(left.start, right.end, op[0], left, right)
-        return left
+        return self._chain(self.factor, _PRODUCT, ("DIV", "MOD"))
 
     def factor(self) -> s.Expr:
         char = self._skip()

@@ -411,6 +411,11 @@ def program_text(draw: st.DrawFn) -> str:
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(program_text())
 def test_random_programs_parse_as_with_the_plain_grammar(text):
+    assert_parses_as_plain(text)
+
+
+def assert_parses_as_plain(text: str) -> None:
+    """parse_text gives the plain grammar's tree, or refuses the text as it does."""
     try:
         expected = plain_tree(text)
     except UnexpectedInput:

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from lark.exceptions import UnexpectedInput
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
-from test_fastpath import module, plain_tree, routine, shape
+from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
 from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
 from rapidfix.rapid import syntax as s
@@ -176,13 +176,7 @@ def program_with_expressions(draw: st.DrawFn) -> str:
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(program_with_expressions())
 def test_random_expressions_parse_as_with_the_plain_grammar(text):
-    try:
-        expected = plain_tree(text)
-    except UnexpectedInput:
-        with pytest.raises(UnexpectedInput):
-            parse_text(text)
-        return
-    assert shape(parse_text(text)) == expected
+    assert_parses_as_plain(text)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
