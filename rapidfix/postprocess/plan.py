@@ -76,23 +76,36 @@ def compensate_joints(
 
 def _explain_conf(robot: RobotModel, flange: np.ndarray, conf: np.ndarray, status: np.ndarray,
                   reason: np.ndarray, shown: int = 3) -> None:
-    """Name the confdata that do reach a target whose own confdata names no solution.
+    """Name the confdata that do reach a target whose own confdata names no solution:
+    the `shown` nearest to its own (sum of absolute differences; ties in confdata order).
 
-    Runs on the failing targets only (an error path, so a loop over them is fine).
-    """
+    Vectorised over the failing targets: a program written in the wrong work object can
+    fail on every move."""
     rows = np.flatnonzero(status == IKStatus.NO_MATCHING_CONF)
     if rows.size == 0:
         return
     sols = robot.ik(flange[rows])
-    for k, row in enumerate(rows):
-        valid = sols.q[k][sols.valid[k]]
-        if valid.shape[0] == 0:
-            continue
-        found = np.unique(robot.confdata(valid), axis=0)
-        order = np.argsort(np.abs(found - conf[row]).sum(axis=1), kind="stable")
-        options = ", ".join(str(found[i].tolist()) for i in order[:shown])
-        reason[row] = (f"no solution on the branch its confdata {conf[row].tolist()} names "
-                       f"(it is reachable with {options})")
+    valid = sols.valid
+    found = np.zeros((*valid.shape, 4), dtype=int)
+    if valid.any():
+        found[valid] = robot.confdata(sols.q[valid])
+    dist = np.abs(found - conf[rows][:, None, :]).sum(axis=2)
+    # sort each row's slots by (invalid last, distance, confdata): the same order as the
+    # distinct confdata sorted, then stably by distance
+    keys = (found[..., 3], found[..., 2], found[..., 1], found[..., 0], dist, ~valid)
+    order = np.lexsort(keys, axis=-1)
+    ranked = np.take_along_axis(found, order[..., None], axis=1).tolist()
+    ok = np.take_along_axis(valid, order, axis=1).tolist()
+    for row, slots, good, own in zip(rows.tolist(), ranked, ok, conf[rows].tolist()):
+        options: list[list[int]] = []
+        for slot, usable in zip(slots, good):
+            if not usable or len(options) == shown:
+                break
+            if not options or slot != options[-1]:
+                options.append(slot)
+        if options:
+            reason[row] = (f"no solution on the branch its confdata {own} names "
+                           f"(it is reachable with {', '.join(map(str, options))})")
 
 
 @dataclass(frozen=True)

@@ -55,3 +55,31 @@ def test_small_programs_solve_in_numpy_large_ones_with_the_compiled_kernels(cell
         assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
         assert screws._COMPILED.get() and joint_rbf._COMPILED.get()
     assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
+
+
+def test_a_target_on_a_wrong_branch_names_the_nearest_confdata_that_reach_it(cell):
+    """The reason names, per target, the three nearest distinct confdata among the valid
+    solutions (distance: sum of absolute differences; ties in confdata order). Reference:
+    each target on its own, np.unique then a stable sort, as the rule reads."""
+    from rapidfix.kinematics import IKStatus
+    from rapidfix.postprocess.plan import _explain_conf
+
+    robot = cell["robot"]
+    rng = np.random.default_rng(21)
+    q = rng.uniform(robot.limits[:, 0] * 0.9, robot.limits[:, 1] * 0.9, (300, 6))
+    poses = robot.fk(q)
+    conf = robot.confdata(q) + np.array([3, -4, 5, 0])  # a branch no solution is on
+    status = np.full(300, IKStatus.NO_MATCHING_CONF)
+    status[::7] = IKStatus.OK  # not explained
+    reason = np.full(300, "", dtype=object)
+    _explain_conf(robot, poses, conf, status, reason)
+    sols = robot.ik(poses)
+    for row in range(300):
+        if status[row] == IKStatus.OK:
+            assert reason[row] == ""
+            continue
+        found = np.unique(robot.confdata(sols.q[row][sols.valid[row]]), axis=0)
+        order = np.argsort(np.abs(found - conf[row]).sum(axis=1), kind="stable")
+        want = ", ".join(str(found[i].tolist()) for i in order[:3])
+        assert reason[row] == (f"no solution on the branch its confdata {conf[row].tolist()} "
+                               f"names (it is reachable with {want})")
