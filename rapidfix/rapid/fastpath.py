@@ -51,6 +51,7 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import fast_expressions
 from rapidfix.rapid import syntax as s
+from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.fast_expressions import (
     MOVED_BY_FAST_EXPRESSIONS,
     PLAIN_VALUE,
@@ -326,9 +327,15 @@ def _value_node(text: str, start: int) -> s.Expr:
     end = start + len(text)
     first = text[0]
     if first == "[":
-        if _DEEP_START.match(text):
-            return _deep_aggregate(text, start, _RESTS)
-        return s.NumericAggregate(start, end, aggregate_value(text))
+        try:
+            if _DEEP_START.match(text):
+                return _deep_aggregate(text, start, _RESTS)
+            return s.NumericAggregate(start, end, aggregate_value(text))
+        except NotFast:  # the loose pattern let arithmetic through: [1-1,2]
+            try:
+                return read_expression(text, start)
+            except NotRead:
+                raise NotFast(text) from None
     if first.isdigit() or first == ".":
         return s.Number(start, end, number_value(text), text)
     if first == "-":
@@ -624,15 +631,16 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
                 group = value[2:cut]
                 if "[" not in group and value.startswith("],[", cut):
                     rest = value[cut + 1:]
-                    items = rests.get(rest)
-                    if items is None:
-                        items = aggregate_value("[[0]" + rest)[1:]  # the same after any group
-                        rests.keep(rest, items)
-                    try:  # (a position seldom recurs: not kept)
+                    try:
+                        items = rests.get(rest)
+                        if items is None:  # the same after any group
+                            items = aggregate_value("[[0]" + rest)[1:]
+                            rests.keep(rest, items)
+                        # (a position seldom recurs: not kept)
                         position = tuple(map(float, group.split(",")))
-                    except ValueError:
-                        raise NotFast(group) from None
-                    init = numeric_aggregate(at, at + len(value), (position, *items))
+                        init = numeric_aggregate(at, at + len(value), (position, *items))
+                    except (NotFast, ValueError):  # arithmetic the loose pattern let by
+                        pass
             if init is None:
                 init = _value_node(value, at)
         if dims is None:
@@ -728,9 +736,21 @@ def parse_text(text: str) -> s.SourceFile:
     The fast parser gives up on an aggregate it does not read exactly (NotFast)
     and on any syntax error: the contextual lexer may offer a fast token where
     the LALR table merged states, and the plain parser then decides. Its
-    UnexpectedInput passes on for rapidfix.rapid.syntax_errors to explain.
+    UnexpectedInput passes on for rapidfix.rapid.syntax_errors to explain; when the
+    plain grammar met the error in an error window (the items before it blanked), the
+    exception's `parsed_text` is that window, for the explanation to read the same.
     """
     try:
         return fast_parser().parse(text)
-    except (NotFast, UnexpectedInput):
+    except NotFast:
         return rapid_parser().parse(text)
+    except UnexpectedInput as err:
+        win = window(text, error_offset(err, text))
+    if win is not None:
+        try:
+            rapid_parser().parse(win.text)
+        except UnexpectedInput as err:
+            if confirms(err, win):
+                err.parsed_text = win.text  # type: ignore[attr-defined]
+                raise
+    return rapid_parser().parse(text)

@@ -130,8 +130,8 @@ def _accepted(err: UnexpectedInput) -> set[str] | None:
 
 def explain(source: SourceText, fallback: UnexpectedInput) -> RapidSyntaxError:
     """Re-parse `source` with the plain parser to name what was expected exactly."""
-    try:
-        diagnosis_parser().parse(source.text)
+    try:  # the error window the plain grammar met the error in, if it was given one
+        diagnosis_parser().parse(getattr(fallback, "parsed_text", source.text))
     except UnexpectedInput as err:
         return translate(err, source, _accepted(err))
     return translate(fallback, source)  # pragma: no cover - both parsers share a grammar

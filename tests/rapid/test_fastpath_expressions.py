@@ -22,7 +22,7 @@ from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NotRead, read_expression
-from rapidfix.rapid.fastpath import NotFast, fast_parser, parse_text
+from rapidfix.rapid.fastpath import fast_parser
 from rapidfix.rapid.grammar import rapid_parser
 
 # Statements the fast terminals take whole (each becomes a call of a fast run).
@@ -105,12 +105,23 @@ def test_the_reader_gives_up_on_what_it_does_not_build(text):
         read_expression(text, 0)
 
 
-def test_an_aggregate_of_numbers_with_arithmetic_is_left_to_the_grammar():
-    # the loose aggregate pattern takes [1-1,2], whose numbers float() refuses
-    text = routine("Foo [1-1,2];")
-    with pytest.raises(NotFast):
-        fast_parser().parse(text)
-    assert shape(parse_text(text)) == plain_tree(text)
+ARITHMETIC_IN_NUMBERS = [
+    routine("Foo [1-1,2];"),
+    routine("Foo [1e5-3,2], [[1,2],[1+1]], [[1-1,2,3],[1,0,0,0]];"),
+    routine("MoveL [[500-1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],v100,z1,tool0;"),
+    routine("MoveL p1,[100-1,500,5000,1000],z1,tool0;", "MoveL p2,[100-1,500,5000,1000],z1,tool0;"),
+    module("CONST robtarget p:=[[10-1,20,30],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+           "CONST robtarget q{2}:=[[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+           "[[1+1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];",
+           "CONST num n{3}:=[1-1,2,3];"),
+]
+
+
+@pytest.mark.parametrize("text", ARITHMETIC_IN_NUMBERS)
+def test_an_aggregate_of_numbers_with_arithmetic_is_read_fast_to_the_plain_tree(text):
+    """The loose aggregate pattern takes [1-1,2], whose numbers float() refuses: the
+    expression reader builds it, instead of the whole file going to the plain grammar."""
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
 # ---------------------------------------------------------------- random expressions

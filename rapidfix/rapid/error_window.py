@@ -1,0 +1,83 @@
+"""The part of a program a syntax error can be explained from, so that the plain
+grammar need not read a whole large file again to name one error near its end.
+
+The fast parser reads a file in one pass; when it stops on a syntax error, the plain
+grammar decides (and explains) what is wrong, and the plain grammar is several times
+slower. Yet everything before the error was read without fault, so the module items
+before the one holding the error can be left out: `window` blanks them (every
+character but line breaks becomes a space, so offsets, lines and columns stay).
+Inside a module item the LALR states do not depend on how many items came before
+(the parse table reaches the same state on the item's first keyword), so the plain
+grammar meets the same error, expects the same tokens and says the same.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+# The first keyword of a module item at the start of a line: a routine (only ever a
+# module item), or a data declaration (a module item when it is not inside a routine).
+_ROUTINE = re.compile(r"^[ \t]*(?:LOCAL[ \t]+)?(PROC|FUNC|TRAP)\b", re.I | re.M)
+_ROUTINE_END = re.compile(r"^[ \t]*(ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
+_DATA = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)[ \t]+)*(CONST|VAR|PERS|RECORD|ALIAS)\b",
+                   re.I | re.M)
+_MODULE = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(?:\r\n|\r|\n)", re.I | re.M)
+_NOT_BREAK = re.compile(r"[^\r\n]+")
+# Below this many characters left out, the plain grammar may as well read it all.
+_WORTH = 20_000
+
+
+@dataclass(frozen=True)
+class Window:
+    """`text` with the module items in [start, cut) blanked; `cut` is the offset of the
+    first keyword of the item the error is in (or after)."""
+
+    text: str
+    cut: int
+
+
+def error_offset(err: UnexpectedInput, text: str) -> int:
+    """Where a Lark parse error stands in `text` (its end for an unexpected end)."""
+    if isinstance(err, UnexpectedToken):
+        return len(text) if err.token.type == "$END" else err.token.start_pos
+    if isinstance(err, UnexpectedCharacters):
+        return err.pos_in_stream
+    return len(text)
+
+
+def _last(pattern: re.Pattern[str], text: str, start: int, end: int) -> int:
+    """Offset of the keyword of the last match of `pattern` in text[start:end], or -1."""
+    found = -1
+    for match in pattern.finditer(text, start, end):
+        found = match.start(1)
+    return found
+
+
+def window(text: str, error_at: int) -> Window | None:
+    """The window for an error a parser met at `error_at` having read everything before
+    it, or None when too little would be left out.
+
+    The cut is the first keyword of the last module item that starts before the error
+    (the parser took that keyword, so every item before it is complete): the last
+    routine, or a declaration after it ends (module data). The blanked part starts on
+    the line after its module's `MODULE` line."""
+    cut = _last(_ROUTINE, text, 0, error_at)
+    ended = _last(_ROUTINE_END, text, max(cut, 0), error_at)
+    if cut < 0 or ended > cut:  # the error is in module data: cut at its declaration
+        cut = max(cut, _last(_DATA, text, max(ended, 0), error_at))
+    head = -1
+    for match in _MODULE.finditer(text, 0, max(cut, 0)):
+        head = match.end()
+    if cut < 0 or head < 0 or cut - head < _WORTH:
+        return None
+    blank = _NOT_BREAK.sub(lambda m: " " * len(m.group()), text[head:cut])
+    return Window(text[:head] + blank + text[cut:], cut)
+
+
+def confirms(window_err: UnexpectedInput, win: Window) -> bool:
+    """Whether the plain grammar's error in the window is past the cut: then it took the
+    item's keyword in the window too, and the error is the whole text's."""
+    return error_offset(window_err, win.text) > win.cut

@@ -1,0 +1,101 @@
+"""A syntax error is explained from its error window (rapidfix.rapid.error_window): the
+module items before the one holding it blanked, so the plain grammar need not read a
+large file again. The message, line and column must be exactly those the plain grammar
+gives on the whole text: checked on the samples and benchmark shapes with errors put in
+at random places, with windows made however small (the size threshold set to 0)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from odd_shapes import odd_moves
+from program_shapes import shape_moves
+
+from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid import error_window, fastpath, parse_program
+from rapidfix.rapid.source import decode_source
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+TEXTS = [
+    *(decode_source(p.read_bytes(), p.name).text for p in sorted(SAMPLES.iterdir())
+      if p.suffix in (".mod", ".prg")),
+    shape_moves("prg", 40), shape_moves("control", 30), shape_moves("crlf_tabs", 30),
+    odd_moves("modules", 50), odd_moves("many_procs", 20), odd_moves("frames", 20),
+    # module data after the routines, LOCAL/TASK items, a module with attributes
+    "MODULE A(SYSMODULE, NOSTEPIN)\n  LOCAL PROC r()\n    a:=1;\n  ENDPROC\n"
+    "  TASK PERS num n:=1;\n  LOCAL VAR num m{2}:=[1,\n    2];\n  FUNC num f()\n"
+    "    RETURN 1;\n  ENDFUNC\n  CONST num k:=2;\n  TRAP t\n    Stop;\n  ENDTRAP\n"
+    "  VAR num z:=3;\nENDMODULE\n",
+]
+INSERTS = ["x", ";", "(", ")", "]", "[", ",", '"', "ENDPROC", "PROC p()", "MoveL", "VAR",
+           "CONST num", "MODULE", "ENDMODULE", "%%%", "1_a", "\\", ":=", "IF", "\n", "<DDN>"]
+
+
+def _outcome(text: str) -> str:
+    try:
+        program = parse_program(text, "t.mod")
+    except RapidSyntaxError as err:
+        return str(err)
+    return f"ok {len(program.motions)} {len(program.declarations)}"
+
+
+@pytest.fixture
+def any_window(monkeypatch):
+    monkeypatch.setattr(error_window, "_WORTH", 0)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                  HealthCheck.function_scoped_fixture])
+@given(which=st.integers(0, len(TEXTS) - 1), where=st.floats(0, 1), cut=st.integers(0, 3),
+       insert=st.sampled_from(INSERTS))
+def test_the_error_window_says_what_the_whole_text_says(any_window, monkeypatch, which, where,
+                                                        cut, insert):
+    base = TEXTS[which]
+    at = int(where * len(base))
+    text = base[:at] + insert + base[at + cut:]
+    windowed = _outcome(text)
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "window", lambda _text, _at: None)
+        whole = _outcome(text)
+    assert windowed == whole
+
+
+def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch):
+    """The plain grammar reads only the window: the items before the error's routine
+    are blank in what it is given, and the message is the whole text's."""
+    text = shape_moves("named", 1500)  # three routines
+    at = text.rindex("MoveL")
+    text = text[:at] + "MoveL p1 v100, z1, tMill;\n    " + text[at:]
+    seen: list[str] = []
+    plain = fastpath.rapid_parser()
+
+    class Spy:
+        def parse(self, given: str):
+            seen.append(given)
+            return plain.parse(given)
+
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "rapid_parser", lambda: Spy())
+        with pytest.raises(RapidSyntaxError) as windowed:
+            parse_program(text, "t.mod")
+    assert len(seen) == 1 and len(seen[0]) == len(text)
+    kept = seen[0].replace(" ", "").replace("\n", "")
+    assert len(kept) < len(text.replace(" ", "").replace("\n", "")) / 4
+    assert "CONST robtarget" not in seen[0]  # the data section is blank
+    line = text[:text.index("MoveL p1 v100")].count("\n") + 1
+    assert f":{line}:" in str(windowed.value)
+    monkeypatch.setattr(fastpath, "window", lambda _text, _at: None)
+    with pytest.raises(RapidSyntaxError) as whole:
+        parse_program(text, "t.mod")
+    assert str(windowed.value) == str(whole.value)
+
+
+def test_no_window_when_little_would_be_left_out():
+    text = "MODULE M\n  PROC main()\n    MoveL p1 v100;\n  ENDPROC\nENDMODULE\n"
+    assert error_window.window(text, text.index("v100")) is None
