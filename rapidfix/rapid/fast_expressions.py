@@ -61,7 +61,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
                         word_end: str, aggregates: tuple[str, str]) -> dict[str, str]:
     """Lexer patterns of the fast terminals' values: `value` (of a procedure call's
     argument or a declaration), `arguments` (a procedure call's argument list, without
-    its name and ';'). A function call's arguments are sums of operands (names with
+    its name and ';'), `selectors` (the components and indices of an assignment's
+    target after its name). A function call's arguments are sums of operands (names with
     their components and indices, numbers, signs), calls of such sums (one level deep)
     and optional arguments; a value may
     also be a sum of such operands, function calls and parenthesised sums, or an
@@ -116,7 +117,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
     value = f"(?:(?=\\[)(?:{loose}|{deep}|{aggregate})|{quick}|(?:{term}{follow})+)"
     arguments = rf"(?:{argument(value)}(?:{WS}*,{WS}*(?!;)|{WS}*(?=[\\;])))+"
-    return {"value": value, "arguments": arguments}
+    return {"value": value, "arguments": arguments, "selectors": postfix(simple)}
 
 
 # What the reader takes without reading it again: the values fastpath reads itself

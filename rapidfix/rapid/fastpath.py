@@ -10,6 +10,7 @@ grammar, each matching a whole run of such statements at once:
 - FAST_DECLS: declarations `[LOCAL] [TASK] VAR|PERS|CONST type name [:= value];`
 - FAST_CALLS: procedure calls `Name [arg {, arg}];`, each argument a value or
   `\\Name[:=value]` (an optional argument, with or without a comma before it),
+  and assignments `target := value;` (the target a name with components and indices),
 
 a value being a name, an unsigned number or an all-numeric aggregate of up to
 two levels, with only whitespace between the pieces. The callbacks split a token
@@ -157,7 +158,10 @@ def _patterns() -> dict[str, str]:
         {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
         plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE))
     value = expression["value"]
-    call = f"{call_name}(?:{WS}*{expression['arguments']})?{WS}*;"
+    # a procedure call, or an assignment: its value is taken by the arguments' pattern
+    # (written once), and split_calls refuses (NotFast) what is more than one value
+    call = (f"{call_name}(?:{expression['selectors']}{WS}*:={WS}*)?"
+            f"(?:{WS}*{expression['arguments']})?{WS}*;")
     # array dimensions: numbers (`{50}`, `{2,3}`)
     dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
@@ -512,8 +516,9 @@ _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 
 
-def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
-    """The ProcedureCall nodes of a FAST_CALLS token starting at offset `base`.
+def split_calls(text: str, base: int) -> list[s.Statement]:
+    """The ProcedureCall (and Assignment) nodes of a FAST_CALLS token starting at
+    offset `base`.
 
     A call is its name, its leading arguments and a tail of further arguments. In
     a CAM program the first argument (the target) changes from line to line but
@@ -524,7 +529,7 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
     targets, or any call whose second argument varies too), the call's tail is
     taken after its second argument. Names are interned.
     """
-    calls: list[s.ProcedureCall] = []
+    calls: list[s.Statement] = []
     tails = _TAILS
     argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
     head, find, piece_at = _CALL_HEAD.match, text.index, CALL_PIECE.match
@@ -535,6 +540,12 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         tail_at = m.end()
         pos = find(";", tail_at) + 1
         tail_text = text[tail_at:pos]
+        if first is None or first[0] in ":.{":  # an assignment, or a call without one
+            name_end = m.end(1)
+            assign = text.find(":=", name_end, pos)
+            if assign >= 0 and text[name_end:assign].lstrip(_WS_CHARS)[:1] in ("", ".", "{"):
+                calls.append(_assignment(text, base, m.start(1), assign, pos))
+                continue
         tail = tails.get(tail_text)
         if first is None:
             head_arg = second_arg = None
@@ -575,6 +586,20 @@ def split_calls(text: str, base: int) -> list[s.ProcedureCall]:
         calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
                                tail, shift, second_arg))
     return calls
+
+
+def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.Assignment:
+    """The Assignment node of `target := value;` in a run (text[start:end]), `assign` the
+    offset of its `:=`. The run's pattern takes arguments after the `:=`: more than one
+    value there is not RAPID, and NotFast lets the plain grammar say so."""
+    target_text = text[start:assign].rstrip(_WS_CHARS)
+    target = _value_node(target_text, base + start)
+    raw = text[assign + 2:end - 1]
+    value_text = raw.strip(_WS_CHARS)
+    if not value_text or value_text[0] == "\\":
+        raise NotFast(value_text)
+    value = _value_node(value_text, base + assign + 2 + len(raw) - len(raw.lstrip(_WS_CHARS)))
+    return s.Assignment(target.start, base + end, target, value)
 
 
 def shared_aggregate_value(text: str, rests: Memo) -> tuple:
@@ -736,9 +761,8 @@ def parse_text(text: str) -> s.SourceFile:
     The fast parser gives up on an aggregate it does not read exactly (NotFast)
     and on any syntax error: the contextual lexer may offer a fast token where
     the LALR table merged states, and the plain parser then decides. Its
-    UnexpectedInput passes on for rapidfix.rapid.syntax_errors to explain; when the
-    plain grammar met the error in an error window (the items before it blanked), the
-    exception's `parsed_text` is that window, for the explanation to read the same.
+    UnexpectedInput passes on for rapidfix.rapid.syntax_errors to explain. After a
+    syntax error the plain grammar reads the error's window (rapid.error_window) first.
     """
     try:
         return fast_parser().parse(text)
@@ -751,6 +775,5 @@ def parse_text(text: str) -> s.SourceFile:
             rapid_parser().parse(win.text)
         except UnexpectedInput as err:
             if confirms(err, win):
-                err.parsed_text = win.text  # type: ignore[attr-defined]
                 raise
     return rapid_parser().parse(text)

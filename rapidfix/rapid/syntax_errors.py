@@ -14,6 +14,7 @@ import re
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.grammar import diagnosis_parser, terminal_patterns
 from rapidfix.rapid.source import SourceText
 
@@ -129,11 +130,18 @@ def _accepted(err: UnexpectedInput) -> set[str] | None:
 
 
 def explain(source: SourceText, fallback: UnexpectedInput) -> RapidSyntaxError:
-    """Re-parse `source` with the plain parser to name what was expected exactly."""
-    try:  # the error window the plain grammar met the error in, if it was given one
-        diagnosis_parser().parse(getattr(fallback, "parsed_text", source.text))
-    except UnexpectedInput as err:
-        return translate(err, source, _accepted(err))
+    """Re-parse `source` with the plain parser to name what was expected exactly.
+
+    `fallback` is the plain grammar's error, met having read everything before it, so
+    the re-parse may read the error's window (rapid.error_window) instead of the file."""
+    text = source.text
+    win = window(text, error_offset(fallback, text))
+    for candidate in ([win.text] if win is not None else []) + [text]:
+        try:
+            diagnosis_parser().parse(candidate)
+        except UnexpectedInput as err:
+            if win is None or candidate is text or confirms(err, win):
+                return translate(err, source, _accepted(err))
     return translate(fallback, source)  # pragma: no cover - both parsers share a grammar
 
 

@@ -18,7 +18,7 @@ from odd_shapes import odd_moves
 from program_shapes import shape_moves
 
 from rapidfix.exceptions import RapidSyntaxError
-from rapidfix.rapid import error_window, fastpath, parse_program
+from rapidfix.rapid import error_window, fastpath, parse_program, syntax_errors
 from rapidfix.rapid.source import decode_source
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
@@ -34,7 +34,8 @@ TEXTS = [
     "  VAR num z:=3;\nENDMODULE\n",
 ]
 INSERTS = ["x", ";", "(", ")", "]", "[", ",", '"', "ENDPROC", "PROC p()", "MoveL", "VAR",
-           "CONST num", "MODULE", "ENDMODULE", "%%%", "1_a", "\\", ":=", "IF", "\n", "<DDN>"]
+           "CONST num", "MODULE", "ENDMODULE", "%%%", "1_a", "\\", ":=", "IF", "\n", "<DDN>",
+           "x := a, b;", "n := n + 1;", "p.trans.x := ", ".", "{", "1-"]
 
 
 def _outcome(text: str) -> str:
@@ -62,6 +63,7 @@ def test_the_error_window_says_what_the_whole_text_says(any_window, monkeypatch,
     windowed = _outcome(text)
     with monkeypatch.context() as m:
         m.setattr(fastpath, "window", lambda _text, _at: None)
+        m.setattr(syntax_errors, "window", lambda _text, _at: None)
         whole = _outcome(text)
     assert windowed == whole
 
@@ -91,6 +93,7 @@ def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch)
     line = text[:text.index("MoveL p1 v100")].count("\n") + 1
     assert f":{line}:" in str(windowed.value)
     monkeypatch.setattr(fastpath, "window", lambda _text, _at: None)
+    monkeypatch.setattr(syntax_errors, "window", lambda _text, _at: None)
     with pytest.raises(RapidSyntaxError) as whole:
         parse_program(text, "t.mod")
     assert str(windowed.value) == str(whole.value)

@@ -8,6 +8,7 @@ precedence and associativity come out in the node structure).
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -53,6 +54,16 @@ READ_FAST = [
     "MoveC Offs(RelTool(p1,0,-d,0),0,0,h/2), Offs(p2,0,0,-h), v100, z1, tool0;",
 ]
 
+ASSIGNMENTS = [
+    "pCur := Offs(p1, 0.5, 0, 0);",
+    "pCur.trans.z := pCur.trans.z + 1;",
+    "nCount:=nCount+1;",
+    "a{i+1}.b := [1,2,3];",
+    "x {1,2} := -2;",
+    "reg1 := reg1 DIV 2;",
+    "p := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+]
+
 
 @pytest.mark.parametrize("statement", READ_FAST)
 def test_expression_arguments_are_read_in_runs_to_the_plain_tree(statement):
@@ -61,6 +72,16 @@ def test_expression_arguments_are_read_in_runs_to_the_plain_tree(statement):
     body = tree.modules[0].items[0].body
     assert all(isinstance(item, s.LazyCall) for item in body)  # all three from one run
     assert shape(tree) == plain_tree(text)
+
+
+@pytest.mark.parametrize("statement", ASSIGNMENTS)
+def test_assignments_are_read_in_runs_to_the_plain_tree(statement):
+    text = routine("Stop;", statement, "Stop;")
+    calls = next(t for t in fast_parser().terminals if t.name == "FAST_CALLS")
+    assert re.fullmatch(calls.pattern.to_regexp(), f"Stop;\n  {statement}\n  Stop;")
+    body = fast_parser().parse(text).modules[0].items[0].body
+    assert [type(item) for item in body] == [s.LazyCall, s.Assignment, s.LazyCall]
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
 DECLARATIONS = module(
@@ -178,6 +199,11 @@ def program_with_expressions(draw: st.DrawFn) -> str:
         f"Foo {', '.join(values)};",
         f"Foo a \\A:={values[-1]}, b;",
         f"MoveL p1,v100,z1,tool0\\WObj:={values[0]};",
+        # assignments, to targets with components and indices, of one value or more
+        f"n{draw(SPACE)}:={draw(SPACE)}{values[0]};",
+        f"p.trans{draw(st.sampled_from(['', '.x', '{1}', ' {i, 2}.y', ' . z']))} := {values[-1]};",
+        f"n := {', '.join(values)};",
+        f"n := \\A:={values[0]};",
     ]
     body = draw(st.lists(st.sampled_from(statements), min_size=1, max_size=4))
     decl = f"VAR num n:={values[-1]};"
