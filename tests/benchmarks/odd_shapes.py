@@ -8,6 +8,11 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 - expressions: targets and offsets written with named num constants and arithmetic
 - modules:     a .prg of many small modules
 - wide:        long comment lines with non-ASCII text, long identifiers, `\\Conc`, `\\ID`
+- assign:      targets assigned in code (`pCur := Offs(...)`, `pCur.trans.z := ...`), counters
+- io:          I/O, waits and messages with strings between the moves
+- loops:       FOR loops around moves to `Offs` of the loop variable
+- failing:     a third of the targets out of reach, a third on a branch nothing is on
+- records:     offsets written with record components of tools and targets
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -18,7 +23,8 @@ import functools
 
 from program_shapes import _head, _robtarget, _targets
 
-ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide")
+ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
+              "assign", "io", "loops", "failing", "records")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -144,8 +150,67 @@ def _wide(n: int) -> list[str]:
     return [*out, "ENDMODULE"]
 
 
+def _parts(moves: list[str], per: int = 500) -> list[str]:
+    out = []
+    for first in range(0, len(moves), per):
+        out += [f"  PROC Part{first // per}()", *moves[first:first + per], "  ENDPROC"]
+    return out
+
+
+def _assign(n: int) -> list[str]:
+    moves = []
+    for k in range(n):
+        moves += [f"    pCur := Offs(p{k}, 0.5, 0, 0);", "    pCur.trans.z := pCur.trans.z + 1;",
+                  "    MoveL pCur, v100, z1, tMill\\WObj:=wPlate;", "    nDone:=nDone+1;",
+                  f"    MoveL p{k}, v100, z1, tMill\\WObj:=wPlate;"]
+    return [*_head("Assign"), "  VAR robtarget pCur;", "  VAR num nDone:=0;", *_decls(n),
+            *_parts(moves, 800), "ENDMODULE"]
+
+
+def _io(n: int) -> list[str]:
+    moves = []
+    for k in range(n):
+        moves.append(f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;")
+        moves.append(("    SetDO doGlue, 1;", "    WaitTime 0.2;",
+                      f'    TPWrite "Point {k} reached, count " \\Num:=nCount;',
+                      "    WaitDI diReady, 1;")[k % 4])
+    return [*_head("Io"), "  VAR num nCount:=0;", *_decls(n), *_parts(moves, 1000), "ENDMODULE"]
+
+
+def _loops(n: int) -> list[str]:
+    moves = []
+    for k in range(0, n, 2):
+        moves += ["    FOR i FROM 0 TO 3 DO",
+                  f"      MoveL Offs(p{k}, i*0.1, 0, 0), v100, z1, tMill\\WObj:=wPlate;",
+                  "    ENDFOR", f"    MoveL p{k + 1}, v100, z1, tMill\\WObj:=wPlate;"]
+    return [*_head("Loops"), "  VAR num i;", *_decls(n + 1), *_parts(moves, 800), "ENDMODULE"]
+
+
+def _failing(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    out = [*_head("Failing")]
+    for i in range(n):
+        t, c = trans[i], confs[i]
+        if i % 3 == 1:  # out of reach
+            x, y, z = (float(v) for v in t.strip("[]").split(","))
+            t = f"[{x + 4000:.3f},{y:.3f},{z:.3f}]"
+        elif i % 3 == 2:  # a branch no solution is on
+            c = "[3,-4,5,0]"
+        out.append(f"  CONST robtarget p{i}:={_robtarget(t, c)};")
+    moves = [f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*out, *_parts(moves), "ENDMODULE"]
+
+
+def _records(n: int) -> list[str]:
+    moves = [f"    MoveL Offs(p{k},tMill.tframe.trans.x*0,p{k}.trans.x*0,0),v100,z1,"
+             "tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("Records"), *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
-             "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide}
+             "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
+             "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
+             "records": _records}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

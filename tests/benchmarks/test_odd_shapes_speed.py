@@ -8,7 +8,9 @@ quarter of it):
 For each shape of tests/benchmarks/odd_shapes.py, `rapidfix rewrite` as a fresh
 process at two sizes: lines per second of the child's CPU time and how much the cost
 per line grows from the smaller to the larger program (1.0: linear; a quadratic step
-shows as about 4). Only correctness is asserted, never time.
+shows as about 4). `test_syntax_error_in_a_large_file` times `rapidfix check` of a
+large program with one syntax error against the clean program. Only correctness is
+asserted, never time.
 """
 
 from __future__ import annotations
@@ -43,3 +45,27 @@ def test_rewrite_odd_shapes(model_path, tmp_path):  # noqa: F811
     print(f"{'shape':12s} {'lines':>8s} {'lines/s CPU':>12s} {'cost/line growth':>17s}")
     for shape, count, rate, growth in rows:
         print(f"{shape:12s} {count:8,d} {rate:12,.0f} {growth:16.2f}x")
+
+
+def test_syntax_error_in_a_large_file(tmp_path):
+    """`rapidfix check` of a large program with one syntax error, early or late, against
+    the same program without it: the plain grammar explains the error from its window
+    (rapidfix.rapid.error_window), not from the whole file read twice more."""
+    from program_shapes import shape_program
+
+    text = shape_program("named", LINES * 5)
+    clean = tmp_path / "clean.mod"
+    clean.write_text(text, encoding="utf-8", newline="")
+    cpu_clean, _, done = _run_cli("check", str(clean))
+    assert done.returncode == 0, done.stderr
+    print(f"\nrapidfix check, {text.count(chr(10)):,} lines (named): clean {cpu_clean:.2f} s CPU")
+    for where, at in (("in the first routine", text.index("MoveL")),
+                      ("in the last routine", text.rindex("MoveL"))):
+        bad = tmp_path / "bad.mod"
+        bad.write_text(text[:at] + "MoveL p1 v100, z1, tMill;\n    " + text[at:],
+                       encoding="utf-8", newline="")
+        cpu, _, done = _run_cli("check", str(bad))
+        line = text[:at].count("\n") + 1
+        assert done.returncode == 1 and f"bad.mod:{line}:" in done.stderr, done.stderr
+        print(f"  a syntax error {where} (line {line:,}): {cpu:.2f} s CPU, "
+              f"{cpu / cpu_clean:.2f}x the clean file")
