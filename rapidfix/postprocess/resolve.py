@@ -52,9 +52,17 @@ class Site:
 
     @property
     def label(self) -> str:
-        """The instruction and its destination as written, for messages."""
+        """The instruction and its destination as written, for messages (a destination
+        longer than a robtarget written inline cut short)."""
         target = self.targets[-1] if self.targets else None
-        return f"{self.motion.name} {target.text if target else ''}".strip()
+        text = target.text if target else ""
+        if len(text) > LABEL_CHARS:
+            text = text[:LABEL_CHARS - 4] + " ..."
+        return f"{self.motion.name} {text}".strip()
+
+
+#: the longest destination a message quotes whole
+LABEL_CHARS = 200
 
 
 @dataclass

@@ -105,17 +105,23 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
         return (rf"\({WS}*(?:{argument(item)}"
                 rf"(?:{WS}*,{WS}*(?!\))|{WS}*(?=[\\)])))*\)")
 
+    # Where two alternatives take the same text (`1` is quick and simple, `[1,2]` loose
+    # and a group), the later one is guarded by a look-ahead refusing the earlier:
+    # otherwise a statement that fails near its end (a syntax error, or a call the fast
+    # path does not take) is retried in every combination, 2^n for n such arguments.
+    either = rf"(?:{quick}|(?!{quick}){simple})"
     # a function call's arguments may be calls of sums themselves, one level deep
     # (`Offs(RelTool(p,0,0,5),0,0,-nLift)`)
-    nested = rf"(?=[A-Za-z]){value_name}{WS}*{call_list(f'(?:{loose}|{quick}|{simple})')}"
-    inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{quick}|{simple})")
+    nested = rf"(?=[A-Za-z]){value_name}{WS}*{call_list(f'(?:{loose}|{either})')}"
+    inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})")
     paren = rf"\({WS}*{simple}{WS}*\)"
     term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
             rf"|{paren})")
     group = rf"\[{WS}*(?:{simple}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
-    item = f"(?:{loose}|{group}|{simple})"
+    item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
-    value = f"(?:(?=\\[)(?:{loose}|{deep}|{aggregate})|{quick}|(?:{term}{follow})+)"
+    value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
+             f"|{quick}|(?!{quick})(?:{term}{follow})+)")
     arguments = rf"(?:{argument(value)}(?:{WS}*,{WS}*(?!;)|{WS}*(?=[\\;])))+"
     return {"value": value, "arguments": arguments, "selectors": postfix(simple)}
 
@@ -304,11 +310,21 @@ class _Reader:
         return s.Argument(value.start, value.end, "required", None, value)
 
 
+#: longer values are left to the grammar: a tree thousands of operators deep is
+#: copied (a shared tail's operands) by recursion, which Python's stack limits
+LONGEST = 2000
+
+
 def read_expression(text: str, start: int) -> s.Expr:
     """The node rapid.lark builds for the value `text` standing at offset `start`;
     NotRead when it is not such a value, exactly and whole."""
+    if len(text) > LONGEST:
+        raise NotRead(text)
     reader = _Reader(text, start)
-    node = reader.expression()
+    try:
+        node = reader.expression()
+    except RecursionError:  # nested deeper than Python's stack: the grammar's to read
+        raise NotRead(text) from None
     if reader._skip():
         raise NotRead(text)
     return node

@@ -1,0 +1,78 @@
+"""Inputs that ran away: statements the fast terminals almost take, and expressions
+nested thousands deep.
+
+The fast terminals are regular expressions. Where two of their alternatives took the
+same text (`1` as a single value and as a sum, `[1,2]` as a numeric aggregate and as
+a group of sums), a statement that failed near its end was retried in every
+combination: `Foo \\A:=1 \\A:=1 ... x;` with 20 options took 1.5 s, with 200 it did
+not finish. Each case below has 64 repetitions, 2^64 combinations for the old
+patterns: the guard stops the test after a minute instead of hanging the suite, the
+new patterns need milliseconds. Only termination and the verdict are asserted."""
+
+from __future__ import annotations
+
+import signal
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from test_fastpath import plain_tree, shape
+
+from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid import parse_program
+from rapidfix.rapid.fast_expressions import LONGEST, NotRead, read_expression
+from rapidfix.rapid.fastpath import fast_parser
+
+N = 64
+NEAR_MISSES = {
+    "options": "Foo " + " ".join(["\\A:=1"] * N) + " x;",
+    "options of names": "Foo " + " ".join(["\\A:=b"] * N) + " x;",
+    "aggregates": "Foo " + ",".join(["[1,2]"] * N) + " x y;",
+    "groups in an aggregate": "Foo [" + ",".join(["[1,2]"] * N) + "] x;",
+    "function calls": "Foo " + ",".join(["f(1)"] * N) + " x;",
+    "Offs arguments": "MoveL Offs(p," + ",".join(["1"] * N) + ") x;",
+    "a string at the end": "Foo " + ", ".join(["1"] * N) + ', "end" x;',
+    "assignment": "x := " + " ".join(["\\A:=1"] * N) + ";",
+}
+
+
+class Hang(Exception):
+    pass
+
+
+@pytest.fixture
+def guard():
+    """Stop a runaway match after a minute (SIGALRM) rather than hang the suite."""
+    def stop(_signum, _frame):
+        raise Hang()
+
+    previous = signal.signal(signal.SIGALRM, stop)
+    signal.alarm(60)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+@pytest.mark.parametrize("name", list(NEAR_MISSES))
+def test_a_statement_the_fast_terminals_almost_take_is_refused_at_once(name, guard):
+    text = f"MODULE M\n  PROC main()\n    {NEAR_MISSES[name]}\n  ENDPROC\nENDMODULE\n"
+    with pytest.raises(RapidSyntaxError) as err:
+        parse_program(text, "m.mod")
+    assert str(err.value).startswith("m.mod:3:")
+
+
+@pytest.mark.parametrize("name", ["options", "aggregates", "function calls"])
+def test_the_same_statements_when_valid_are_read_fast(name, guard):
+    statement = NEAR_MISSES[name].replace(" x y;", ";").replace(" x;", ";")
+    text = f"MODULE M\n  PROC main()\n    {statement}\n  ENDPROC\nENDMODULE\n"
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+def test_expressions_nested_beyond_the_stack_are_left_to_the_grammar():
+    with pytest.raises(NotRead):
+        read_expression("-" * 3000 + "1", 0)
+    with pytest.raises(NotRead):
+        read_expression("+".join(["a"] * (LONGEST // 2 + 1)), 0)
+    assert shape(read_expression("+".join(["a"] * 50), 0)) is not None
