@@ -26,6 +26,7 @@ terminals short (their compile time is part of every command's start-up).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 import sys
 from collections.abc import Callable
@@ -94,6 +95,10 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name or (negated) number, as most are
     quick = rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z]){value_name})(?={WS}*[,;)\\])"
+    # a string as a whole value, without the characters that split statements and
+    # arguments, nor quotes or backslashes (escapes); a string in a sum or a function
+    # call's argument is left to the grammar
+    string = rf'"[^"\\\r\n;,()\[\]{{}}]*"(?={WS}*[,;\\])'
 
     def argument(value: str) -> str:
         """`\\Name:=` or nothing before a value, or a switch `\\Name`."""
@@ -121,7 +126,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
     value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
-             f"|{quick}|(?!{quick})(?:{term}{follow})+)")
+             f"|{quick}|{string}|(?!{quick})(?:{term}{follow})+)")
     arguments = rf"(?:{argument(value)}(?:{WS}*,{WS}*(?!;)|{WS}*(?=[\\;])))+"
     return {"value": value, "arguments": arguments, "selectors": postfix(simple)}
 
@@ -310,22 +315,46 @@ class _Reader:
         return s.Argument(value.start, value.end, "required", None, value)
 
 
-#: longer values are left to the grammar: a tree thousands of operators deep is
-#: copied (a shared tail's operands) by recursion, which Python's stack limits
-LONGEST = 2000
+#: trees deeper than this are left to the grammar: a shared tail's operands are copied
+#: by recursion (fastpath._moved), which Python's stack limits
+DEEPEST = 200
+# a tree this deep needs at least this many characters (an operator and an operand per
+# level): shorter text is not measured
+_DEEP_TEXT = 2 * DEEPEST
+
+
+@functools.lru_cache(maxsize=64)
+def _fields(kind: type) -> tuple[str, ...]:
+    """The slots of a node type, its bases' included."""
+    return tuple(name for cls in kind.__mro__ for name in getattr(cls, "__slots__", ()))
+
+
+def _depth(node: s.Node) -> int:
+    """How many levels of nodes `node` holds (walked without recursion)."""
+    deepest, stack = 0, [(node, 1)]
+    while stack:
+        item, level = stack.pop()
+        deepest = max(deepest, level)
+        for name in _fields(type(item)):
+            child = getattr(item, name, None)
+            for part in (child if isinstance(child, list) else (child,)):
+                if isinstance(part, s.Node):
+                    stack.append((part, level + 1))
+    return deepest
 
 
 def read_expression(text: str, start: int) -> s.Expr:
     """The node rapid.lark builds for the value `text` standing at offset `start`;
-    NotRead when it is not such a value, exactly and whole."""
-    if len(text) > LONGEST:
-        raise NotRead(text)
+    NotRead when it is not such a value, exactly and whole, or nests deeper than
+    DEEPEST."""
     reader = _Reader(text, start)
     try:
         node = reader.expression()
     except RecursionError:  # nested deeper than Python's stack: the grammar's to read
         raise NotRead(text) from None
     if reader._skip():
+        raise NotRead(text)
+    if len(text) > _DEEP_TEXT and _depth(node) > DEEPEST:
         raise NotRead(text)
     return node
 

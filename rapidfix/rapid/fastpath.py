@@ -323,6 +323,9 @@ def _value_node(text: str, start: int) -> s.Expr:
     """The node the grammar builds for a value the fast terminals take, at `start`: a
     name, a number, a numeric aggregate, a negated number or a function call; any other
     (arithmetic, components, aggregates of expressions) from fast_expressions."""
+    if text[0] == '"' and text[-1] == '"' and text.count('"') == 2:
+        # a whole string (the lexer pattern takes none with escapes)
+        return s.String(start, start + len(text), text[1:-1])
     if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
         try:
             return read_expression(text, start)
@@ -440,6 +443,8 @@ def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
         return s.NumericAggregate, start, end, (node.value,)
     if isinstance(node, s.NameRef):
         return s.NameRef, start, end, (node.name,)
+    if isinstance(node, s.String):
+        return s.String, start, end, (node.value,)
     return _nested, start, end, (node,)
 
 

@@ -52,6 +52,11 @@ READ_FAST = [
     "MoveL Offs(RelTool(p1,0,0,-nStep),nStep*2,0,-1),v100,z1,tool0;",
     "MoveL RelTool(Offs(p, a.b{1}, -1*c, 0), 0, 0, 0\\Rz:=-n), v100, fine, tool0;",
     "MoveC Offs(RelTool(p1,0,-d,0),0,0,h/2), Offs(p2,0,0,-h), v100, z1, tool0;",
+    # whole strings as values
+    'TPWrite "Point 5 reached";',
+    'TPWrite "Count " \\Num:=nCount;',
+    'Foo "", 1, "a b", "!x:=1";',
+    'ErrWrite "Error", "Part missing" \\RL2:="check it";',
 ]
 
 ASSIGNMENTS = [
@@ -62,6 +67,7 @@ ASSIGNMENTS = [
     "x {1,2} := -2;",
     "reg1 := reg1 DIV 2;",
     "p := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    's := "abc";',
 ]
 
 
@@ -151,6 +157,8 @@ KEYWORDS = ["DIV", "MOD", "div", "NOT", "AND", "OR", "XOR", "TRUE", "FALSE"]
 NUMBERS = ["0", "1", "2.5", ".5", "7.", "1e5", "1E-3", "2.5e+2", "9E+09", "0x1F", "0b101",
            "0o17", "1.e3"]
 SPACE = st.sampled_from(["", "", "", " ", "  ", "\n", "\t"])
+STRINGS = st.sampled_from(["", "a b", "Point 5", "x;y", 'say ""hi""', "a\\\\b", "a,b", "!c",
+                           "p:=1", "(x)", "[1]", "tab\there", "ÄÖü"])
 
 
 @st.composite
@@ -204,6 +212,10 @@ def program_with_expressions(draw: st.DrawFn) -> str:
         f"p.trans{draw(st.sampled_from(['', '.x', '{1}', ' {i, 2}.y', ' . z']))} := {values[-1]};",
         f"n := {', '.join(values)};",
         f"n := \\A:={values[0]};",
+        # strings: whole values read fast, anything else left to the grammar
+        f'TPWrite "{draw(STRINGS)}"{draw(SPACE)}\\Num:={values[0]};',
+        f's := "{draw(STRINGS)}"{draw(st.sampled_from(["", " + s", ", 1"]))};',
+        f'Foo f("{draw(STRINGS)}"), ["a", {values[0]}];',
     ]
     body = draw(st.lists(st.sampled_from(statements), min_size=1, max_size=4))
     decl = f"VAR num n:={values[-1]};"

@@ -22,7 +22,7 @@ from test_fastpath import plain_tree, shape
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
-from rapidfix.rapid.fast_expressions import LONGEST, NotRead, read_expression
+from rapidfix.rapid.fast_expressions import DEEPEST, NotRead, read_expression
 from rapidfix.rapid.fastpath import fast_parser
 
 N = 64
@@ -74,5 +74,10 @@ def test_expressions_nested_beyond_the_stack_are_left_to_the_grammar():
     with pytest.raises(NotRead):
         read_expression("-" * 3000 + "1", 0)
     with pytest.raises(NotRead):
-        read_expression("+".join(["a"] * (LONGEST // 2 + 1)), 0)
+        read_expression("+".join(["a"] * (DEEPEST + 1)), 0)
+    with pytest.raises(NotRead):
+        read_expression("(" * 60 + "+".join(["a"] * 150) + ")" * 60, 0)
+    # long and flat (a matrix written over many lines, as real programs have) is read
+    matrix = "[" + ",\n    ".join(["[5, 0, 1, 6, 0, -1]", "[a, 0, 1, 6, 0, -1]"] * 200) + "]"
+    assert len(read_expression(matrix, 0).items) == 400
     assert shape(read_expression("+".join(["a"] * 50), 0)) is not None
