@@ -93,8 +93,10 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     leaf = f"(?:{number}|{value_name})"
     operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix(leaf)})"
     simple = rf"(?:{operand}{follow})+"
-    # first tried: a value that is a single name or (negated) number, as most are
-    quick = rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z]){value_name})(?={WS}*[,;)\\])"
+    # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
+    # most are
+    quick = (rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z])(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
+             rf"(?={WS}*[,;)\\])")
     # a string as a whole value, without the characters that split statements and
     # arguments, nor quotes or backslashes (escapes); a string in a sum or a function
     # call's argument is left to the grammar

@@ -319,10 +319,15 @@ def _call_node(text: str, start: int) -> s.Call:
                               start + tail_at)
 
 
+_BOOLS = {"TRUE": True, "FALSE": False}
+
+
 def _value_node(text: str, start: int) -> s.Expr:
     """The node the grammar builds for a value the fast terminals take, at `start`: a
     name, a number, a numeric aggregate, a negated number or a function call; any other
     (arithmetic, components, aggregates of expressions) from fast_expressions."""
+    if len(text) <= 5 and text.upper() in _BOOLS:
+        return s.Bool(start, start + len(text), _BOOLS[text.upper()])
     if text[0] == '"' and text[-1] == '"' and text.count('"') == 2:
         # a whole string (the lexer pattern takes none with escapes)
         return s.String(start, start + len(text), text[1:-1])
@@ -556,7 +561,8 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
             head_arg = second_arg = None
         else:
             at = base + m.start(2)
-            if first.isidentifier():  # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`)
+            # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`, TRUE or FALSE)
+            if first.isidentifier() and (len(first) > 5 or first.upper() not in _BOOLS):
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
                 node = _value_node(first, at)

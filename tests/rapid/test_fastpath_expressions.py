@@ -52,6 +52,9 @@ READ_FAST = [
     "MoveL Offs(RelTool(p1,0,0,-nStep),nStep*2,0,-1),v100,z1,tool0;",
     "MoveL RelTool(Offs(p, a.b{1}, -1*c, 0), 0, 0, 0\\Rz:=-n), v100, fine, tool0;",
     "MoveC Offs(RelTool(p1,0,-d,0),0,0,h/2), Offs(p2,0,0,-h), v100, z1, tool0;",
+    # TRUE and FALSE as values
+    "Foo TRUE, false \\A:=True;",
+    "SetDO do1, TRUE;",
     # whole strings as values
     'TPWrite "Point 5 reached";',
     'TPWrite "Count " \\Num:=nCount;',
@@ -68,6 +71,8 @@ ASSIGNMENTS = [
     "reg1 := reg1 DIV 2;",
     "p := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     's := "abc";',
+    "bDone := TRUE;",
+    "b{2} := false;",
 ]
 
 
@@ -95,6 +100,7 @@ DECLARATIONS = module(
     "VAR num b := -nStep*(2+nLift) DIV 3;", "PERS num c:=rec.a{2}.b;",
     "CONST robtarget p:=[[10-1,20+0*nStep,30],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     "CONST speeddata v:=[100+nStep*2,500,5000,1000];",
+    "VAR bool b:=TRUE;", "PERS bool c{2}:=[TRUE, FALSE];", 'CONST string s:="x y";',
 )
 
 
