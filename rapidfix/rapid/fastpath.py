@@ -24,10 +24,12 @@ signs, `+ - * / DIV MOD`, parentheses, record components and array elements
 (`Offs(pHome,0,0,-nDepth)`, `0-rModel.numDiameter/2`, `RelTool(p,0,0,0\\Rz:=-1*nAngle)`,
 `vWeld{i+1}`), and aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those
 values are read by fast_expressions' reader, which follows the grammar's expression
-rules and gives up (NotFast) on anything it does not build exactly. Anything else in
-a statement — a comment inside it, a relation or logical operator, a keyword, a
-string, a named or conditional argument, calls nested deeper — ends the run, and
-that statement is parsed by the full grammar as before.
+rules and gives up (NotFast) on anything it does not build exactly. A value may also
+be TRUE or FALSE, or a whole string without escapes, commas, semicolons or brackets
+(`TPWrite "Point reached"`). Anything else in a statement — a comment inside it, a
+relation or logical operator, another keyword, a string in a sum, a named or
+conditional argument, calls nested deeper — ends the run, and that statement is
+parsed by the full grammar as before.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -324,8 +326,9 @@ _BOOLS = {"TRUE": True, "FALSE": False}
 
 def _value_node(text: str, start: int) -> s.Expr:
     """The node the grammar builds for a value the fast terminals take, at `start`: a
-    name, a number, a numeric aggregate, a negated number or a function call; any other
-    (arithmetic, components, aggregates of expressions) from fast_expressions."""
+    name, a number, a numeric aggregate, a negated number, a function call, TRUE/FALSE
+    or a whole string; any other (arithmetic, components, aggregates of expressions)
+    from fast_expressions."""
     if len(text) <= 5 and text.upper() in _BOOLS:
         return s.Bool(start, start + len(text), _BOOLS[text.upper()])
     if text[0] == '"' and text[-1] == '"' and text.count('"') == 2:
