@@ -26,6 +26,9 @@ class Editor:
 
     def __init__(self, program: Program) -> None:
         self.program = program
+        # what rendering needs, kept apart so that the model can go first (`release_program`)
+        self._source = program.source
+        self._original = program.original
         # the edits as columns, in the order they were made: (start, end) offsets and
         # new text (a CAM program has hundreds of thousands of them)
         self._starts: list[int] = []
@@ -155,9 +158,16 @@ class Editor:
         return source.text[line_start:items[0].start] or ""
 
     # ------------------------------------------------------------ output
+    def release_program(self) -> None:
+        """Let go of the program (its syntax tree and model); from here on the editor
+        only renders. A million-line rewrite renders its output in the memory the model
+        held, so the model's and the output's peaks do not add up."""
+        del self.program
+
     def _newlines(self, text: str) -> str:
         text = text.replace("\r\n", "\n")
-        return text if self.program.newline == "\n" else text.replace("\n", self.program.newline)
+        newline = self._source.newline
+        return text if newline == "\n" else text.replace("\n", newline)
 
     def _ordered(self) -> tuple[list[int], list[int], list[str]]:
         """(starts, ends, texts) of the edits by start, end and the order they were made."""
@@ -173,15 +183,15 @@ class Editor:
                 (start[1:] == start[:-1]) & nonempty[:-1] & nonempty[1:])
             if clash.any():
                 after = int(np.argmax(clash)) + 1
-                where = self.program.span(int(start[after]), int(end[after]))
+                where = Span(int(start[after]), int(end[after]), self._source)
                 raise EditConflict(f"edits overlap at {where.location}")
         return start.tolist(), end.tolist(), list(map(self._texts.__getitem__, order.tolist()))
 
     def text(self) -> str:
         """The edited text (decoded)."""
-        original = self.program.text
+        original = self._source.text
         # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
-        marker = "\r" if self.program.newline == "\n" else "\n"
+        marker = "\r" if self._source.newline == "\n" else "\n"
         newlines = self._newlines
         starts, ends, texts = self._ordered()
         gaps = [original[a:b] for a, b in zip([0, *ends], starts)]
@@ -192,5 +202,5 @@ class Editor:
     def render(self) -> bytes:
         """The edited file as bytes: original encoding, BOM and line endings."""
         if not self._texts:
-            return self.program.original
-        return self.program.source.encode(self.text())
+            return self._original
+        return self._source.encode(self.text())
