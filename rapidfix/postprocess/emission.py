@@ -170,6 +170,7 @@ class _Emitter:
             for i in inter_sites]
         literals = jointtarget_literals(np.degrees(np.concatenate(q_parts)),
                                         np.concatenate(ext_parts))
+        del q_parts, ext_parts
         dest_literal = literals[: len(joint_sites)]
         inter_start = len(joint_sites)
         self._filtered(filtered_sites)
@@ -189,7 +190,7 @@ class _Emitter:
                 inter_start += len(points)
                 self._emit_joint_with_points(i, dest_literal[k], inter.get(i), points,
                                              approach_literal.get(i), segment_of.get(i))
-            del literals, dest_literal, approach_literal, q_parts, ext_parts
+            del literals, dest_literal, approach_literal
             self.jt_names.clear()
             self._flush_declarations()
             return self._expected()
@@ -202,11 +203,9 @@ class _Emitter:
                           if i in inter else [])
                 inter_start += len(points)
                 extras[k] = (inter.get(i), points, approach_literal.get(i), segment_of.get(i))
-        self._emit_joints(joint_sites, dest_literal, extras)
-        # the declarations hold the literals now: let them go before the declarations
-        # are inserted and the expected poses gathered (the emission's peak)
-        del literals, dest_literal, extras, approach_literal, q_parts, ext_parts
-        self.jt_names.clear()
+        del literals  # dest_literal and extras hold what is still needed
+        self._emit_joints(joint_sites, dest_literal, extras)  # empties dest_literal
+        del dest_literal, extras, approach_literal
         self._flush_declarations()
         return self._expected()
 
@@ -257,7 +256,8 @@ class _Emitter:
         list operations instead of several calls per move): the names of all
         destinations and inserted points in the order the moves use them, their
         declarations, the statements. `extras` holds the points inserted before a move
-        (see `emit`)."""
+        (see `emit`). `literals` (the destinations' jointtargets) is emptied once they
+        are declared."""
         sites = list(map(self.sites.__getitem__, joint_sites))
         motions = [site.motion for site in sites]
         operands = [site.targets[-1] for site in sites]
@@ -294,8 +294,14 @@ class _Emitter:
                                             [motions[k] for k in want_move],
                                             [operands[k] for k in want_move])
             dest_names = [names[n] for n in dest_at]
+            del want_stems, want_literals, want_move
         else:
             dest_names = self._jointtarget_names(stems, literals, motions, operands)
+        # the declarations hold the literals now: they go (with the names cache, which
+        # nothing asks after this) before the statements are made, the emission's peak
+        del stems
+        literals.clear()
+        self.jt_names.clear()
         text = self.program.text
         syntaxes = [motion.syntax for motion in motions]
         starts = [syntax.start for syntax in syntaxes]

@@ -33,7 +33,9 @@ class Editor:
         # new text (a CAM program has hundreds of thousands of them)
         self._starts: list[int] = []
         self._ends: list[int] = []
-        self._texts: list[str] = []
+        # a new line inserted after an anchor is kept as (indentation, text) until the
+        # output is rendered, not as one more string per line (see `insert_lines_after`)
+        self._texts: list[str | tuple[str, str]] = []
 
     # ------------------------------------------------------------ primitives
     def replace(self, span: Span | tuple[int, int], text: str) -> None:
@@ -48,6 +50,11 @@ class Editor:
     def replace_many(self, starts: Sequence[int], ends: Sequence[int],
                      texts: Sequence[str]) -> None:
         """`replace` for many (start, end) offsets at once, in order."""
+        self._replace_many(starts, ends, texts)
+
+    def _replace_many(self, starts: Sequence[int], ends: Sequence[int],
+                      texts: Sequence[str | tuple[str, str]]) -> None:
+        """`replace_many`, where a text may also be a line kept as (indentation, text)."""
         if not len(starts) == len(ends) == len(texts):
             raise ValueError("replace_many needs as many starts, ends and texts")
         if not starts:
@@ -93,12 +100,21 @@ class Editor:
         ends = np.where(index < len(starts), starts[np.minimum(index, len(starts) - 1)],
                         size).tolist()
         positions: list[int] = []
-        bodies: list[str] = []
+        bodies: list[str | tuple[str, str]] = []
+        pads: dict[str, str] = {}  # one string for each distinct indentation
+        open_end = not full.endswith("\n")
         for line_start, start, end, text in zip(first, spans[:, 0].tolist(), ends, texts):
             pad = indent
             if pad is None:
                 line = full[line_start:start]
                 pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if text and "\n" not in text and "\r" not in text and not (end == size and open_end):
+                # one line (the usual case): written out as pad + text + "\n" by `text`,
+                # once the program model is gone (a CAM program inserts a hundred
+                # thousand declarations, each text also held by the rewrite's checks)
+                positions.append(end)
+                bodies.append((pads.setdefault(pad, pad), text))
+                continue
             if "\n" in text:
                 parts = text.split("\n")
                 if "" in parts:  # an empty line gets no indentation
@@ -111,7 +127,7 @@ class Editor:
                 body = "\n" + body.rstrip("\n")
             positions.append(end)
             bodies.append(body)
-        self.replace_many(positions, positions, bodies)
+        self._replace_many(positions, positions, bodies)
 
     def line_numbers(self, offsets: Sequence[int]) -> list[int]:
         """1-based line of each character offset of the program text (one search for all)."""
@@ -169,7 +185,7 @@ class Editor:
         newline = self._source.newline
         return text if newline == "\n" else text.replace("\n", newline)
 
-    def _ordered(self) -> tuple[list[int], list[int], list[str]]:
+    def _ordered(self) -> tuple[list[int], list[int], list[str | tuple[str, str]]]:
         """(starts, ends, texts) of the edits by start, end and the order they were made."""
         start = np.asarray(self._starts, dtype=np.int64)
         end = np.asarray(self._ends, dtype=np.int64)
@@ -193,9 +209,11 @@ class Editor:
         # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
         marker = "\r" if self._source.newline == "\n" else "\n"
         newlines = self._newlines
-        starts, ends, texts = self._ordered()
+        starts, ends, kept = self._ordered()
         gaps = [original[a:b] for a, b in zip([0, *ends], starts)]
         gaps.append(original[ends[-1] if ends else 0:])
+        texts = [text if type(text) is str else f"{text[0]}{text[1]}\n" for text in kept]
+        del kept
         texts = [newlines(text) if marker in text else text for text in texts]
         return "".join(chain.from_iterable(zip(gaps, texts))) + gaps[-1]
 
