@@ -584,14 +584,14 @@ class _Emitter:
         self.decl_anchor_order, self.decl_blocks = [], {}
         for anchor, target in order:
             block = blocks.pop(anchor)
-            text = block if type(block) is str else "\n".join(block)
             if type(anchor) is int:
                 after.append((target.syntax.start, target.syntax.end))
-                after_texts.append(text)
+                after_texts.append(block if type(block) is str else "\n".join(block))
             else:
                 self.editor.insert_lines_after(after, after_texts)
                 after, after_texts = [], []
-                self.editor.insert_declaration(target, text)
+                # given as lines: not joined into one more copy of them all
+                self.editor.insert_declaration(target, [block] if type(block) is str else block)
         self.editor.insert_lines_after(after, after_texts)
 
     def _add_checks(self, idents: Sequence[int], rows: Sequence[int]) -> None:

@@ -16,6 +16,9 @@ import numpy as np
 from rapidfix.rapid.program import Declaration, ModuleInfo, MotionInstruction, Program
 from rapidfix.rapid.span import Span
 
+#: new lines as an edit keeps them until it renders: (indentation, a line or the lines)
+_Lines = tuple[str, str | list[str]]
+
 
 class EditConflict(ValueError):
     """Two edits touch the same text."""
@@ -33,9 +36,9 @@ class Editor:
         # new text (a CAM program has hundreds of thousands of them)
         self._starts: list[int] = []
         self._ends: list[int] = []
-        # a new line inserted after an anchor is kept as (indentation, text) until the
-        # output is rendered, not as one more string per line (see `insert_lines_after`)
-        self._texts: list[str | tuple[str, str]] = []
+        # new lines inserted after an anchor are kept as (indentation, text or lines)
+        # until the output is rendered, not as one more string (see `insert_lines_after`)
+        self._texts: list[str | _Lines] = []
 
     # ------------------------------------------------------------ primitives
     def replace(self, span: Span | tuple[int, int], text: str) -> None:
@@ -53,7 +56,7 @@ class Editor:
         self._replace_many(starts, ends, texts)
 
     def _replace_many(self, starts: Sequence[int], ends: Sequence[int],
-                      texts: Sequence[str | tuple[str, str]]) -> None:
+                      texts: Sequence[str | _Lines]) -> None:
         """`replace_many`, where a text may also be a line kept as (indentation, text)."""
         if not len(starts) == len(ends) == len(texts):
             raise ValueError("replace_many needs as many starts, ends and texts")
@@ -75,16 +78,18 @@ class Editor:
         """Insert `text` right after `span` (same line)."""
         self.insert(span.end, text)
 
-    def insert_line_after(self, span: Span, text: str, indent: str | None = None) -> None:
+    def insert_line_after(self, span: Span, text: str | list[str],
+                          indent: str | None = None) -> None:
         """Insert `text` as new line(s) after the line where `span` ends.
 
         Each new line gets `indent`, by default the indentation of the line
-        where `span` starts.
+        where `span` starts. `text` may also be given as its lines (a list: the same
+        as joining them with '\\n', without making that string).
         """
         self.insert_lines_after([(span.start, span.end)], [text], indent)
 
-    def insert_lines_after(self, anchors: Sequence[tuple[int, int]], texts: Sequence[str],
-                           indent: str | None = None) -> None:
+    def insert_lines_after(self, anchors: Sequence[tuple[int, int]],
+                           texts: Sequence[str | list[str]], indent: str | None = None) -> None:
         """`insert_line_after` for many (start, end) anchors at once, in order (a CAM
         program gets a new declaration after each of its hundred thousand)."""
         if not anchors:
@@ -100,7 +105,7 @@ class Editor:
         ends = np.where(index < len(starts), starts[np.minimum(index, len(starts) - 1)],
                         size).tolist()
         positions: list[int] = []
-        bodies: list[str | tuple[str, str]] = []
+        bodies: list[str | _Lines] = []
         pads: dict[str, str] = {}  # one string for each distinct indentation
         open_end = not full.endswith("\n")
         for line_start, start, end, text in zip(first, spans[:, 0].tolist(), ends, texts):
@@ -108,6 +113,15 @@ class Editor:
             if pad is None:
                 line = full[line_start:start]
                 pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if type(text) is list:
+                if text and "" not in text and not (end == size and open_end) and not any(
+                        "\n" in part or "\r" in part for part in text):
+                    # lines of their own (a CAM program's new declarations among the
+                    # module's): written out by `text`, as the lines below are
+                    positions.append(end)
+                    bodies.append((pads.setdefault(pad, pad), text))
+                    continue
+                text = "\n".join(text)
             if text and "\n" not in text and "\r" not in text and not (end == size and open_end):
                 # one line (the usual case): written out as pad + text + "\n" by `text`,
                 # once the program model is gone (a CAM program inserts a hundred
@@ -152,9 +166,10 @@ class Editor:
         """Insert a new declaration on the line after `declaration`, same indentation."""
         self.insert_line_after(declaration.span, text)
 
-    def insert_declaration(self, module: ModuleInfo, text: str, indent: str | None = None) -> None:
+    def insert_declaration(self, module: ModuleInfo, text: str | list[str],
+                           indent: str | None = None) -> None:
         """Insert a module-level declaration after the module's last one (or after the
-        MODULE line when there is none)."""
+        MODULE line when there is none); `text` may be given as its lines."""
         if indent is None and module.declarations_end == module.header_end:
             indent = self._first_item_indent(module)
         anchor = self.program.span(module.declarations_end, module.declarations_end)
@@ -185,7 +200,7 @@ class Editor:
         newline = self._source.newline
         return text if newline == "\n" else text.replace("\n", newline)
 
-    def _ordered(self) -> tuple[list[int], list[int], list[str | tuple[str, str]]]:
+    def _ordered(self) -> tuple[list[int], list[int], list[str | _Lines]]:
         """(starts, ends, texts) of the edits by start, end and the order they were made."""
         start = np.asarray(self._starts, dtype=np.int64)
         end = np.asarray(self._ends, dtype=np.int64)
@@ -212,7 +227,9 @@ class Editor:
         starts, ends, kept = self._ordered()
         gaps = [original[a:b] for a, b in zip([0, *ends], starts)]
         gaps.append(original[ends[-1] if ends else 0:])
-        texts = [text if type(text) is str else f"{text[0]}{text[1]}\n" for text in kept]
+        texts = [text if type(text) is str else f"{text[0]}{text[1]}\n"
+                 if type(text[1]) is str else text[0] + ("\n" + text[0]).join(text[1]) + "\n"
+                 for text in kept]
         del kept
         texts = [newlines(text) if marker in text else text for text in texts]
         return "".join(chain.from_iterable(zip(gaps, texts))) + gaps[-1]
