@@ -128,3 +128,31 @@ def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monk
     # and the bytes are those of the steps run with the model alive throughout
     _, _, emission = _steps(data, name, comp, RewriteOptions())
     assert emission.editor.render() == HEADER_LINE.sub(b"", result.data)
+
+
+@pytest.mark.parametrize("name", ["milling.mod", "ballbar.mod"])
+def test_the_line_bound_in_blocks_of_segments_gives_the_same_rewrite(comp, name, monkeypatch):
+    """The path check bounds each segment's bow in blocks of `chunks.LINE_BOUND`
+    segments: a bound is its segment's own, so blocks of 1 and 3 segments give the
+    same points and bytes as one block of all, and the bounds are those of one call."""
+    from rapidfix import chunks
+    from rapidfix.postprocess import refinement
+
+    data = (SAMPLES / name).read_bytes()
+    calls: list[int] = []
+    bound = refinement.line_deviation_bound
+
+    def counted(*args):
+        calls.append(len(args[2]))
+        return bound(*args)
+
+    monkeypatch.setattr(refinement, "line_deviation_bound", counted)
+    whole = rewrite_source(data, name, comp, RewriteOptions())
+    segments = calls[:]
+    assert segments and len(segments) == 1  # the samples are smaller than one block
+    for size in (1, 3):
+        monkeypatch.setattr(chunks, "LINE_BOUND", size)
+        calls.clear()
+        result = rewrite_source(data, name, comp, RewriteOptions())
+        assert result.data == whole.data and result.points_added == whole.points_added
+        assert sum(calls) == segments[0] and max(calls) <= size
