@@ -21,3 +21,6 @@ COMPENSATE = 4096
 #: joint vectors per call of the error model's prediction on a path (postprocess/path.py):
 #: its temporaries (poses × basis functions) stay in the cache
 PREDICT = 4096
+#: segments per call of the line bound (postprocess/refinement.py): its temporaries take
+#: about 0.5 KB a segment, which a million-line program would hold all at once
+LINE_BOUND = 8192

@@ -12,8 +12,9 @@ it reads and writes no file.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from itertools import groupby, repeat
+from itertools import groupby
 from typing import Any
 
 import numpy as np
@@ -103,14 +104,18 @@ class _Emitter:
         self.editor = Editor(program)
         self.names = NameAllocator(
             texts=[program.text, *(decl_program.text for decl_program in comp.decls)])
-        self.decl_blocks: dict[Any, list[str]] = {}
+        # anchor -> its queued declaration, or their list once there are several (a
+        # CAM program queues one after each of its hundred thousand robtargets)
+        self.decl_blocks: dict[Any, str | list[str]] = {}
         self.decl_anchor_order: list[Any] = []
         self.inserted: set[str] = set()
         #: (stem lower-cased, literal) -> the jointtarget's name: one declaration for both
         self.jt_names: dict[tuple[str, str], str] = {}
         self.units = CheckUnits()
-        # what verification reads back: (statement id, target slot, target row) ...
+        # what verification reads back: (statement id, target slot, target row), move
+        # by move, and as (k,3) arrays for the moves emitted as columns ...
         self.checks: list[tuple[int, int, int]] = []
+        self._check_columns: list[np.ndarray] = []
         # ... and intermediate points: (statement id, refined segment, its index there)
         self.inter_checks: list[tuple[int, int, int]] = []
 
@@ -130,13 +135,9 @@ class _Emitter:
             local = False
             target = next(m for m in self.program.modules if m.name == motion.module)
             where = (motion.module, None)
-        block = self.decl_blocks.get(anchor)
-        if block is None:
-            block = self.decl_blocks[anchor] = []
-            self.decl_anchor_order.append((anchor, target))
         if local and not text.startswith("LOCAL"):
             text = "LOCAL " + text
-        block.append(text)
+        self._queue(anchor, target, [text])
         self.units.add_declaration(*where, text)
 
     def _replace_statement(self, site: Site, edits: list[tuple]) -> int:
@@ -169,6 +170,7 @@ class _Emitter:
             for i in inter_sites]
         literals = jointtarget_literals(np.degrees(np.concatenate(q_parts)),
                                         np.concatenate(ext_parts))
+        del q_parts, ext_parts
         dest_literal = literals[: len(joint_sites)]
         inter_start = len(joint_sites)
         self._filtered(filtered_sites)
@@ -188,6 +190,8 @@ class _Emitter:
                 inter_start += len(points)
                 self._emit_joint_with_points(i, dest_literal[k], inter.get(i), points,
                                              approach_literal.get(i), segment_of.get(i))
+            del literals, dest_literal, approach_literal
+            self.jt_names.clear()
             self._flush_declarations()
             return self._expected()
         # the points inserted before a move: (its intermediate rows, their literals, its
@@ -199,7 +203,9 @@ class _Emitter:
                           if i in inter else [])
                 inter_start += len(points)
                 extras[k] = (inter.get(i), points, approach_literal.get(i), segment_of.get(i))
-        self._emit_joints(joint_sites, dest_literal, extras)
+        del literals  # dest_literal and extras hold what is still needed
+        self._emit_joints(joint_sites, dest_literal, extras)  # empties dest_literal
+        del dest_literal, extras, approach_literal
         self._flush_declarations()
         return self._expected()
 
@@ -250,7 +256,8 @@ class _Emitter:
         list operations instead of several calls per move): the names of all
         destinations and inserted points in the order the moves use them, their
         declarations, the statements. `extras` holds the points inserted before a move
-        (see `emit`)."""
+        (see `emit`). `literals` (the destinations' jointtargets) is emptied once they
+        are declared."""
         sites = list(map(self.sites.__getitem__, joint_sites))
         motions = [site.motion for site in sites]
         operands = [site.targets[-1] for site in sites]
@@ -287,8 +294,14 @@ class _Emitter:
                                             [motions[k] for k in want_move],
                                             [operands[k] for k in want_move])
             dest_names = [names[n] for n in dest_at]
+            del want_stems, want_literals, want_move
         else:
             dest_names = self._jointtarget_names(stems, literals, motions, operands)
+        # the declarations hold the literals now: they go (with the names cache, which
+        # nothing asks after this) before the statements are made, the emission's peak
+        del stems
+        literals.clear()
+        self.jt_names.clear()
         text = self.program.text
         syntaxes = [motion.syntax for motion in motions]
         starts = [syntax.start for syntax in syntaxes]
@@ -301,8 +314,15 @@ class _Emitter:
                 targets = site.targets
                 heads[n] = (text[starts[n] + len(syntaxes[n].name):targets[0].argument.start]
                             + text[targets[1].argument.start:values[n].start])
-        tails = [text[value.end:end] for value, end in zip(values, ends)]
-        heads = ["MoveAbsJ" + head for head in heads]
+        # the texts around the names repeat (a program has a few dozen speed, zone and
+        # tool combinations): one string for each distinct one, which the statements'
+        # JointSlots then share
+        distinct: dict[str, str] = {}
+        keep = distinct.setdefault
+        tails = [keep(tail, tail) for tail in
+                 [text[value.end:end] for value, end in zip(values, ends)]]
+        heads = [keep(head, head) for head in ["MoveAbsJ" + head for head in heads]]
+        del distinct
         statements = list(map("".join, zip(heads, dest_names, tails)))
         slots = list(zip(heads, dest_names, tails))
         modules = [motion.module for motion in motions]
@@ -311,7 +331,7 @@ class _Emitter:
         if not extras:
             self.editor.replace_many(starts, ends, statements)
             idents = self.units.add_statements(modules, routines, statements, slots)
-            self.checks.extend(zip(idents, repeat(0), rows))
+            self._add_checks(idents, rows)
             return
         # the statements in the order of the move-by-move route: a move's inserted
         # points, then the move
@@ -353,7 +373,7 @@ class _Emitter:
         all_routines += routines[done:]
         self.editor.replace_many(starts, ends, statements)
         idents = self.units.add_statements(all_modules, all_routines, all_texts, all_slots)
-        self.checks.extend(zip([idents[n] for n in main_at], repeat(0), rows))
+        self._add_checks([idents[n] for n in main_at], rows)
         self.inter_checks.extend((idents[n], segment, row) for n, segment, row in inter_at)
 
     def _jointtarget_names(self, stems: list[str], literals: list[str],
@@ -452,25 +472,30 @@ class _Emitter:
         anchors: list[Any] = []
         targets: list[Any] = []
         wheres: list[tuple[str, str | None]] = []
+        scope = {}  # one (module, routine) tuple for all targets of a scope
         for n, (motion, operand) in enumerate(zip(motions, operands)):
             decl = operand.declaration
             if (decl is not None and operand.form == "name" and decl.module == motion.module
                     and (decl.routine is None or decl.routine.lower() == motion.routine.lower())):
                 anchors.append(id(decl))  # after the declaration
                 targets.append(decl)
-                wheres.append((decl.module, decl.routine))
+                where = (decl.module, decl.routine)
+                wheres.append(scope.setdefault(where, where))
                 if decl.syntax.local and not texts[n].startswith("LOCAL"):
                     texts[n] = "LOCAL " + texts[n]
             else:
                 anchors.append(motion.module.lower())  # among the module's declarations
                 targets.append(module_of[motion.module])
-                wheres.append((motion.module, None))
+                where = (motion.module, None)
+                wheres.append(scope.setdefault(where, where))
         blocks, order, get = self.decl_blocks, self.decl_anchor_order, self.decl_blocks.get
         for anchor, target, text in zip(anchors, targets, texts):
             block = get(anchor)
             if block is None:
-                blocks[anchor] = [text]
+                blocks[anchor] = text
                 order.append((anchor, target))
+            elif type(block) is str:
+                blocks[anchor] = [block, text]
             else:
                 block.append(text)
         pos = 0
@@ -482,12 +507,19 @@ class _Emitter:
     def _extend_block(self, anchor: Any, target: Any, where: tuple[str, str | None],
                       texts: list[str]) -> None:
         """Queue jointtarget declarations at one anchor (`_add_declaration`'s second half)."""
+        self._queue(anchor, target, texts)
+        self.units.add_jointtarget_declarations(*where, texts)
+
+    def _queue(self, anchor: Any, target: Any, texts: list[str]) -> None:
+        """Queue declarations at an anchor (after `target`, a declaration, or among the
+        declarations of `target`, a module)."""
         block = self.decl_blocks.get(anchor)
         if block is None:
-            block = self.decl_blocks[anchor] = []
             self.decl_anchor_order.append((anchor, target))
+            block = self.decl_blocks[anchor] = []
+        elif type(block) is str:
+            block = self.decl_blocks[anchor] = [block]
         block.extend(texts)
-        self.units.add_jointtarget_declarations(*where, texts)
 
     def _filtered(self, filtered_sites: list[int]) -> None:
         """Filtered robtargets: in the declaration when only compensated moves use it,
@@ -544,25 +576,41 @@ class _Emitter:
 
     def _flush_declarations(self) -> None:
         """Insert the queued declarations, in the order their anchors were first used
-        (runs of declarations after declarations go in as one batch)."""
+        (runs of declarations after declarations go in as one batch). The queue is
+        emptied: the editor and the check units hold the texts from here on."""
         after: list[tuple[int, int]] = []
         after_texts: list[str] = []
-        for anchor, target in self.decl_anchor_order:
-            text = "\n".join(self.decl_blocks[anchor])
+        order, blocks = self.decl_anchor_order, self.decl_blocks
+        self.decl_anchor_order, self.decl_blocks = [], {}
+        for anchor, target in order:
+            block = blocks.pop(anchor)
             if type(anchor) is int:
                 after.append((target.syntax.start, target.syntax.end))
-                after_texts.append(text)
+                after_texts.append(block if type(block) is str else "\n".join(block))
             else:
                 self.editor.insert_lines_after(after, after_texts)
                 after, after_texts = [], []
-                self.editor.insert_declaration(target, text)
+                # given as lines: not joined into one more copy of them all
+                self.editor.insert_declaration(target, [block] if type(block) is str else block)
         self.editor.insert_lines_after(after, after_texts)
+
+    def _add_checks(self, idents: Sequence[int], rows: Sequence[int]) -> None:
+        """Checks of slot 0 for many statements at once, kept as one (k,3) array (a
+        hundred thousand tuples of three ints cost several times as much)."""
+        if self.checks:  # the checks made move by move before these keep their place
+            self._check_columns.append(np.array(self.checks, dtype=int).reshape(-1, 3))
+            self.checks = []
+        block = np.zeros((len(rows), 3), dtype=int)
+        block[:, 0] = idents
+        block[:, 2] = rows
+        self._check_columns.append(block)
 
     def _expected(self) -> Expected:
         """Each compensated pose: the check statement and slot it is read from, its
         intended TCP, frames and the conditions it runs in."""
         t = self.planned.targets
-        ids, slots, rows = np.array(self.checks, dtype=int).reshape(-1, 3).T
+        ids, slots, rows = np.concatenate(
+            [*self._check_columns, np.array(self.checks, dtype=int).reshape(-1, 3)]).T
         placement = t.placement.take(rows)
         tcp, context = t.pose[rows], self.solved.context.take(rows)
         joints = self.solved.q_cmd[rows]  # as written where a jointtarget is

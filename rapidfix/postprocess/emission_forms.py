@@ -32,6 +32,9 @@ _WIDTH = _NUMBER.itemsize  # 17
 # a fraction of 0..6 significant decimals keeps (trailing zeros go).
 _INT_KEEP = np.array([[c >= 8 - n for c in range(8)] for n in range(9)], bool)
 _DEC_KEEP = np.array([[c < n for c in range(6)] for n in range(7)], bool)
+#: rows built at once by `_joint_blocks`: its arrays take about 1 KB a row, which a
+#: million-line program would otherwise hold all at once at the emission's peak
+_BLOCK_ROWS = 1 << 14
 
 
 def micro_units(x: np.ndarray) -> np.ndarray:
@@ -111,8 +114,12 @@ def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
     if q_deg.size and not np.abs(q_deg).max() < 1e8:  # not finite, or written with E
         joints = ["[[" + ",".join(format_num(v) for v in row) + "]," for row in q_deg.tolist()]
         return [j + e for j, e in zip(joints, ext_text)]
-    block = _joint_blocks(q_deg.reshape(-1, 6)) if len(q_deg) else []
-    return [j + e for j, e in zip(block, ext_text)]
+    q_deg = q_deg.reshape(-1, 6)
+    out: list[str] = []
+    for a in range(0, len(q_deg), _BLOCK_ROWS):  # a block's arrays are ~1 KB a row
+        out += map(str.__add__, _joint_blocks(q_deg[a:a + _BLOCK_ROWS]),
+                   ext_text[a:a + _BLOCK_ROWS])
+    return out
 
 
 def robtarget_literals(tcp: np.ndarray, conf: np.ndarray, extax: np.ndarray) -> list[str]:

@@ -90,7 +90,9 @@ class NameAllocator:
 
     def __init__(self, taken: Iterable[str] = (), texts: Iterable[str] = ()) -> None:
         self._taken = {name.lower() for name in taken}
-        self._texts = [text.lower() for text in texts]
+        # the texts as given, lowered only while one is searched: a lowered copy kept for
+        # the allocator's life is a million-line program's size once more
+        self._texts = list(texts)
         self._heads: set[str] = set()
         #: truncated base -> the suffix counter of the name last handed out for it: the
         #: free counters of a base only grow (names are never released), so the next
@@ -104,7 +106,7 @@ class NameAllocator:
             return
         self._heads.add(head)
         taken = self._taken
-        for text in self._texts:
+        for text in map(str.lower, self._texts):
             pos = text.find(head)
             while pos >= 0:
                 taken.add(_WORD.match(text, pos).group())

@@ -17,6 +17,7 @@ from functools import cached_property
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.error_model import Context, ErrorModel
 from rapidfix.kinematics import RobotModel
 from rapidfix.postprocess.conditions import arrival_directions
@@ -287,10 +288,14 @@ def _line_bounds(robot: RobotModel, p: Plan, start_flange: np.ndarray, to_row: n
     """An upper bound of each segment's bow as a line (`path.line_deviation_bound`),
     inf where the robot does not carry the tool: a CAM program's short moves are
     settled by it without sampling."""
-    bound = line_deviation_bound(
-        chain_span(robot.axis_points),
-        wrist_levers(robot.axis_dirs, robot.axis_points, robot.home),
-        start_flange, p.flange[to_row], frames.tool[:, :3, 3], p.q_cmd[to_row] - q0c)
+    span = chain_span(robot.axis_points)
+    levers = wrist_levers(robot.axis_dirs, robot.axis_points, robot.home)
+    bound = np.empty(to_row.shape[0])
+    for start in range(0, to_row.shape[0], chunks.LINE_BOUND):  # a segment's bound is its own
+        part = slice(start, start + chunks.LINE_BOUND)
+        rows = to_row[part]
+        bound[part] = line_deviation_bound(span, levers, start_flange[part], p.flange[rows],
+                                           frames.tool[part, :3, 3], p.q_cmd[rows] - q0c[part])
     bound[frames.stationary] = np.inf
     return bound
 

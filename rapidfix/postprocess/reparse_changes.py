@@ -39,7 +39,9 @@ class CheckUnits:
     _decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
     _joint_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
     _other_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
-    _statements: dict[tuple[str, str], list[tuple[int, str]]] = field(default_factory=dict)
+    #: by scope: runs of statements with consecutive ids, (first id, texts) (not an
+    #: (id, text) pair per statement: a CAM program has hundreds of thousands)
+    _statements: dict[tuple[str, str], list[tuple[int, list[str]]]] = field(default_factory=dict)
     #: by statement id: its JointSlot, or None
     _slots: list[JointSlot | None] = field(default_factory=list)
     _count: int = 0
@@ -53,7 +55,11 @@ class CheckUnits:
         """A new or replaced motion instruction; returns its id."""
         ident = self._count
         self._count += 1
-        self._statements.setdefault((module, routine), []).append((ident, text))
+        runs = self._statements.setdefault((module, routine), [])
+        if runs and runs[-1][0] + len(runs[-1][1]) == ident:
+            runs[-1][1].append(text)
+        else:
+            runs.append((ident, [text]))
         self._slots.append(None)
         return ident
 
@@ -73,8 +79,12 @@ class CheckUnits:
         pos = first
         for key, run in groupby(zip(modules, routines)):
             size = len(list(run))
-            statements.setdefault(key, []).extend(
-                zip(range(pos, pos + size), texts[pos - first:pos - first + size]))
+            part = texts[pos - first:pos - first + size]
+            runs = statements.setdefault(key, [])
+            if runs and runs[-1][0] + len(runs[-1][1]) == pos:
+                runs[-1][1].extend(part)
+            else:
+                runs.append((pos, part))
             pos += size
         self._slots.extend(slots if slots is not None else [None] * len(texts))
         return range(first, self._count)
@@ -97,7 +107,9 @@ class CheckUnits:
 
     def statement_scopes(self) -> list[tuple[tuple[str, str], list[int]]]:
         """(module, routine) and the ids of its statements, for each scope."""
-        return [(key, [ident for ident, _ in items]) for key, items in self._statements.items()]
+        return [(key, [ident for first, texts in runs
+                       for ident in range(first, first + len(texts))])
+                for key, runs in self._statements.items()]
 
     def _routines(self) -> dict[str, dict[str, None]]:
         """Module -> its routines (an ordered set: a program may have thousands)."""
@@ -125,11 +137,12 @@ class CheckUnits:
             for routine in routines:
                 out.append(f"PROC {routine}()")
                 out.extend(decls.get((module, routine), []))
-                for ident, statement in self._statements.get((module, routine), []):
-                    if others_only and slots[ident] is not None:
-                        continue
-                    out.append(statement)
-                    order.append(ident)
+                for first, texts in self._statements.get((module, routine), []):
+                    for ident, statement in enumerate(texts, first):
+                        if others_only and slots[ident] is not None:
+                            continue
+                        out.append(statement)
+                        order.append(ident)
                 out.append("ENDPROC")
             out.append("ENDMODULE")
         return "\n".join(out) + "\n", order

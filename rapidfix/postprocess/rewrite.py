@@ -393,10 +393,13 @@ def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensato
         units.comments.extend(header.lines())
     moves_total, inserted = len(planned.sites), emission.inserted
     before = _predicted_before(comp, planned.targets, refined.solved)
+    # the program model and the plan are done with: the output is rendered, and the
+    # read-back parses, in the memory they held (a million-line program's peaks would
+    # otherwise add up); the editor keeps only the source text and the edits
+    editor.release_program()
+    del program, planned, refined, emission
     output = editor.render()
-    # the program model, the plan and the edits are done with: let the read-back's
-    # parse reuse their memory (the largest program's peak is here)
-    del program, planned, refined, emission, editor
+    del editor
     read = read_back(units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
     worst = float(deviation.max()) if deviation.size else None

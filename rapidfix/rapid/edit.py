@@ -8,6 +8,7 @@ ending; the result is encoded with the file's encoding and BOM. With no edits,
 
 from __future__ import annotations
 
+from array import array
 from collections.abc import Sequence
 from itertools import chain
 
@@ -15,6 +16,9 @@ import numpy as np
 
 from rapidfix.rapid.program import Declaration, ModuleInfo, MotionInstruction, Program
 from rapidfix.rapid.span import Span
+
+#: new lines as an edit keeps them until it renders: (indentation, a line or the lines)
+_Lines = tuple[str, str | list[str]]
 
 
 class EditConflict(ValueError):
@@ -26,11 +30,17 @@ class Editor:
 
     def __init__(self, program: Program) -> None:
         self.program = program
+        # what rendering needs, kept apart so that the model can go first (`release_program`)
+        self._source = program.source
+        self._original = program.original
         # the edits as columns, in the order they were made: (start, end) offsets and
         # new text (a CAM program has hundreds of thousands of them)
-        self._starts: list[int] = []
-        self._ends: list[int] = []
-        self._texts: list[str] = []
+        # (machine integers: two Python ints an edit cost 72 bytes more)
+        self._starts = array("q")
+        self._ends = array("q")
+        # new lines inserted after an anchor are kept as (indentation, text or lines)
+        # until the output is rendered, not as one more string (see `insert_lines_after`)
+        self._texts: list[str | _Lines] = []
 
     # ------------------------------------------------------------ primitives
     def replace(self, span: Span | tuple[int, int], text: str) -> None:
@@ -45,6 +55,11 @@ class Editor:
     def replace_many(self, starts: Sequence[int], ends: Sequence[int],
                      texts: Sequence[str]) -> None:
         """`replace` for many (start, end) offsets at once, in order."""
+        self._replace_many(starts, ends, texts)
+
+    def _replace_many(self, starts: Sequence[int], ends: Sequence[int],
+                      texts: Sequence[str | _Lines]) -> None:
+        """`replace_many`, where a text may also be a line kept as (indentation, text)."""
         if not len(starts) == len(ends) == len(texts):
             raise ValueError("replace_many needs as many starts, ends and texts")
         if not starts:
@@ -65,16 +80,18 @@ class Editor:
         """Insert `text` right after `span` (same line)."""
         self.insert(span.end, text)
 
-    def insert_line_after(self, span: Span, text: str, indent: str | None = None) -> None:
+    def insert_line_after(self, span: Span, text: str | list[str],
+                          indent: str | None = None) -> None:
         """Insert `text` as new line(s) after the line where `span` ends.
 
         Each new line gets `indent`, by default the indentation of the line
-        where `span` starts.
+        where `span` starts. `text` may also be given as its lines (a list: the same
+        as joining them with '\\n', without making that string).
         """
         self.insert_lines_after([(span.start, span.end)], [text], indent)
 
-    def insert_lines_after(self, anchors: Sequence[tuple[int, int]], texts: Sequence[str],
-                           indent: str | None = None) -> None:
+    def insert_lines_after(self, anchors: Sequence[tuple[int, int]],
+                           texts: Sequence[str | list[str]], indent: str | None = None) -> None:
         """`insert_line_after` for many (start, end) anchors at once, in order (a CAM
         program gets a new declaration after each of its hundred thousand)."""
         if not anchors:
@@ -90,12 +107,30 @@ class Editor:
         ends = np.where(index < len(starts), starts[np.minimum(index, len(starts) - 1)],
                         size).tolist()
         positions: list[int] = []
-        bodies: list[str] = []
+        bodies: list[str | _Lines] = []
+        pads: dict[str, str] = {}  # one string for each distinct indentation
+        open_end = not full.endswith("\n")
         for line_start, start, end, text in zip(first, spans[:, 0].tolist(), ends, texts):
             pad = indent
             if pad is None:
                 line = full[line_start:start]
                 pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if type(text) is list:
+                if text and "" not in text and not (end == size and open_end) and not any(
+                        "\n" in part or "\r" in part for part in text):
+                    # lines of their own (a CAM program's new declarations among the
+                    # module's): written out by `text`, as the lines below are
+                    positions.append(end)
+                    bodies.append((pads.setdefault(pad, pad), text))
+                    continue
+                text = "\n".join(text)
+            if text and "\n" not in text and "\r" not in text and not (end == size and open_end):
+                # one line (the usual case): written out as pad + text + "\n" by `text`,
+                # once the program model is gone (a CAM program inserts a hundred
+                # thousand declarations, each text also held by the rewrite's checks)
+                positions.append(end)
+                bodies.append((pads.setdefault(pad, pad), text))
+                continue
             if "\n" in text:
                 parts = text.split("\n")
                 if "" in parts:  # an empty line gets no indentation
@@ -108,7 +143,7 @@ class Editor:
                 body = "\n" + body.rstrip("\n")
             positions.append(end)
             bodies.append(body)
-        self.replace_many(positions, positions, bodies)
+        self._replace_many(positions, positions, bodies)
 
     def line_numbers(self, offsets: Sequence[int]) -> list[int]:
         """1-based line of each character offset of the program text (one search for all)."""
@@ -133,9 +168,10 @@ class Editor:
         """Insert a new declaration on the line after `declaration`, same indentation."""
         self.insert_line_after(declaration.span, text)
 
-    def insert_declaration(self, module: ModuleInfo, text: str, indent: str | None = None) -> None:
+    def insert_declaration(self, module: ModuleInfo, text: str | list[str],
+                           indent: str | None = None) -> None:
         """Insert a module-level declaration after the module's last one (or after the
-        MODULE line when there is none)."""
+        MODULE line when there is none); `text` may be given as its lines."""
         if indent is None and module.declarations_end == module.header_end:
             indent = self._first_item_indent(module)
         anchor = self.program.span(module.declarations_end, module.declarations_end)
@@ -155,14 +191,21 @@ class Editor:
         return source.text[line_start:items[0].start] or ""
 
     # ------------------------------------------------------------ output
+    def release_program(self) -> None:
+        """Let go of the program (its syntax tree and model); from here on the editor
+        only renders. A million-line rewrite renders its output in the memory the model
+        held, so the model's and the output's peaks do not add up."""
+        del self.program
+
     def _newlines(self, text: str) -> str:
         text = text.replace("\r\n", "\n")
-        return text if self.program.newline == "\n" else text.replace("\n", self.program.newline)
+        newline = self._source.newline
+        return text if newline == "\n" else text.replace("\n", newline)
 
-    def _ordered(self) -> tuple[list[int], list[int], list[str]]:
+    def _ordered(self) -> tuple[list[int], list[int], list[str | _Lines]]:
         """(starts, ends, texts) of the edits by start, end and the order they were made."""
-        start = np.asarray(self._starts, dtype=np.int64)
-        end = np.asarray(self._ends, dtype=np.int64)
+        start = np.array(self._starts, dtype=np.int64)
+        end = np.array(self._ends, dtype=np.int64)
         order = np.lexsort((end, start))  # stable: ties keep the order of making
         start, end = start[order], end[order]
         if len(order) > 1:
@@ -173,24 +216,28 @@ class Editor:
                 (start[1:] == start[:-1]) & nonempty[:-1] & nonempty[1:])
             if clash.any():
                 after = int(np.argmax(clash)) + 1
-                where = self.program.span(int(start[after]), int(end[after]))
+                where = Span(int(start[after]), int(end[after]), self._source)
                 raise EditConflict(f"edits overlap at {where.location}")
         return start.tolist(), end.tolist(), list(map(self._texts.__getitem__, order.tolist()))
 
     def text(self) -> str:
         """The edited text (decoded)."""
-        original = self.program.text
+        original = self._source.text
         # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
-        marker = "\r" if self.program.newline == "\n" else "\n"
+        marker = "\r" if self._source.newline == "\n" else "\n"
         newlines = self._newlines
-        starts, ends, texts = self._ordered()
+        starts, ends, kept = self._ordered()
         gaps = [original[a:b] for a, b in zip([0, *ends], starts)]
         gaps.append(original[ends[-1] if ends else 0:])
+        texts = [text if type(text) is str else f"{text[0]}{text[1]}\n"
+                 if type(text[1]) is str else text[0] + ("\n" + text[0]).join(text[1]) + "\n"
+                 for text in kept]
+        del kept
         texts = [newlines(text) if marker in text else text for text in texts]
         return "".join(chain.from_iterable(zip(gaps, texts))) + gaps[-1]
 
     def render(self) -> bytes:
         """The edited file as bytes: original encoding, BOM and line endings."""
         if not self._texts:
-            return self.program.original
-        return self.program.source.encode(self.text())
+            return self._original
+        return self._source.encode(self.text())

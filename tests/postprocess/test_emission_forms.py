@@ -84,3 +84,19 @@ def test_jointtarget_literals_of_a_large_block_round_as_python_formats_each_numb
     extax = np.where(rng.random((len(q), 1)) < 0.5, 9e9, rng.uniform(-500, 500, (len(q), 6)))
     got = jointtarget_literals(q, extax)
     assert got == [format_jointtarget(r, e) for r, e in zip(q.tolist(), extax.tolist())]
+
+
+def test_jointtarget_literals_built_in_blocks_of_rows_are_those_of_one_block(monkeypatch):
+    """The literals are built `_BLOCK_ROWS` rows at a time (the numpy temporaries of a
+    million-line program at once took ~1 KB a row): blocks that do not divide the rows,
+    with each row's own external axes, give what `format_jointtarget` writes."""
+    import rapidfix.postprocess.emission_forms as forms
+    from rapidfix.rapid.format import format_jointtarget
+
+    rng = np.random.default_rng(3)
+    q = np.concatenate([rng.uniform(-400, 400, (27, 6)).round(3), rng.uniform(-400, 400, (26, 6))])
+    extax = np.where(rng.random((53, 1)) < 0.5, 9e9, rng.uniform(-50, 50, (53, 6)))
+    want = [format_jointtarget(r, e) for r, e in zip(q.tolist(), extax.tolist())]
+    for rows in (1, 7, 53, 64):
+        monkeypatch.setattr(forms, "_BLOCK_ROWS", rows)
+        assert forms.jointtarget_literals(q, extax) == want

@@ -295,3 +295,45 @@ def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(
     assert result.moves_compensated == 300
     assert parsed and not any("CONST jointtarget jt_" in text for text in parsed)
     assert sum(text.count("MoveAbsJ") for text in parsed) < 30  # the distinct texts only
+
+
+def test_statements_added_one_by_one_or_in_runs_give_the_same_check_program():
+    """The check units keep statements as runs of consecutive ids: added one by one, in
+    runs, interleaved across scopes, the check program and each scope's ids are those
+    of the plain list of (scope, id, text) written out scope by scope."""
+    import itertools
+
+    from rapidfix.postprocess.reparse_changes import CheckUnits
+
+    plan = [("A", "p", "MoveAbsJ a0, v1, z1, tool0;"), ("A", "p", "MoveAbsJ a1, v1, z1, tool0;"),
+            ("A", "q", "MoveAbsJ b0, v1, z1, tool0;"), ("A", "p", "MoveAbsJ a2, v1, z1, tool0;"),
+            ("B", "r", "MoveAbsJ c0, v1, z1, tool0;"), ("A", "p", "MoveAbsJ a3, v1, z1, tool0;"),
+            ("A", "p", "MoveAbsJ a4, v1, z1, tool0;"), ("A", "q", "MoveAbsJ b1, v1, z1, tool0;")]
+    # the independent truth: every statement under its scope, scopes in first-use order
+    scopes: dict[tuple[str, str], list[int]] = {}
+    for ident, (module, routine, _) in enumerate(plan):
+        scopes.setdefault((module, routine), []).append(ident)
+    lines, order = [], []
+    for module in dict.fromkeys(m for m, _, _ in plan):
+        lines.append(f"MODULE {module}")
+        for (m, routine), idents in scopes.items():
+            if m == module:
+                lines += [f"PROC {routine}()", *(plan[i][2] for i in idents), "ENDPROC"]
+                order += idents
+        lines.append("ENDMODULE")
+    want = ("\n".join(lines) + "\n", order)
+
+    for cuts in ([], [1, 2, 3, 4, 5, 6, 7], [3, 5], [2, 6], [4]):  # where runs start
+        units = CheckUnits()
+        bounds = [0, *cuts, len(plan)]
+        for a, b in itertools.pairwise(bounds):
+            if b - a == 1 and a % 2:
+                assert units.add_statement(*plan[a]) == a
+            else:
+                part = plan[a:b]
+                assert units.add_statements([m for m, _, _ in part], [r for _, r, _ in part],
+                                            [t for _, _, t in part]) == range(a, b)
+        assert units.text() == want
+        assert units.statement_scopes() == list(scopes.items())
+        _, motions = units.parse("x.mod")
+        assert [m.target.name for m in motions] == [t.split()[1][:-1] for _, _, t in plan]

@@ -92,3 +92,67 @@ def test_approach_points_are_planned_and_emitted_for_fine_movej():
     approach_points = {n for n in emission.inserted if n.endswith("_app")}
     assert len(approach_points) == sum(refined.mode.get(i) == "joint" for i in planned.approach)
     assert approach_points
+
+
+@pytest.mark.parametrize("name", ["milling.mod", "palletizer.prg"])
+def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monkeypatch):
+    """The rewrite renders in the memory the syntax tree, the model and the plan held
+    (a million-line program's peaks would add up otherwise): at render time nothing
+    refers to the program any more, not even through a reference cycle (the rewrite
+    runs with the cyclic collector paused, so a cycle would keep it to the end)."""
+    import weakref
+
+    import rapidfix.postprocess.rewrite as rewrite_module
+    from rapidfix.rapid.edit import Editor
+
+    programs: list[weakref.ref] = []
+    alive_at_render: list[bool] = []
+
+    def parse(data, filename):
+        program = parse_program(data, filename)
+        programs.append(weakref.ref(program))
+        return program
+
+    render = Editor.render
+
+    def checked_render(self):
+        alive_at_render.append(programs[-1]() is not None)
+        return render(self)
+
+    monkeypatch.setattr(rewrite_module, "parse_program", parse)
+    monkeypatch.setattr(Editor, "render", checked_render)
+    data = (SAMPLES / name).read_bytes()
+    result = rewrite_source(data, name, comp, RewriteOptions())
+    assert result.moves_compensated > 0 and alive_at_render == [False]
+    monkeypatch.undo()
+    # and the bytes are those of the steps run with the model alive throughout
+    _, _, emission = _steps(data, name, comp, RewriteOptions())
+    assert emission.editor.render() == HEADER_LINE.sub(b"", result.data)
+
+
+@pytest.mark.parametrize("name", ["milling.mod", "ballbar.mod"])
+def test_the_line_bound_in_blocks_of_segments_gives_the_same_rewrite(comp, name, monkeypatch):
+    """The path check bounds each segment's bow in blocks of `chunks.LINE_BOUND`
+    segments: a bound is its segment's own, so blocks of 1 and 3 segments give the
+    same points and bytes as one block of all, and the bounds are those of one call."""
+    from rapidfix import chunks
+    from rapidfix.postprocess import refinement
+
+    data = (SAMPLES / name).read_bytes()
+    calls: list[int] = []
+    bound = refinement.line_deviation_bound
+
+    def counted(*args):
+        calls.append(len(args[2]))
+        return bound(*args)
+
+    monkeypatch.setattr(refinement, "line_deviation_bound", counted)
+    whole = rewrite_source(data, name, comp, RewriteOptions())
+    segments = calls[:]
+    assert segments and len(segments) == 1  # the samples are smaller than one block
+    for size in (1, 3):
+        monkeypatch.setattr(chunks, "LINE_BOUND", size)
+        calls.clear()
+        result = rewrite_source(data, name, comp, RewriteOptions())
+        assert result.data == whole.data and result.points_added == whole.points_added
+        assert sum(calls) == segments[0] and max(calls) <= size

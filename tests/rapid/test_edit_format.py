@@ -141,3 +141,60 @@ def test_formatted_values_parse_back():
     assert r.extax == (9e9,) * 6
     assert program.declaration("s").value == 'a "b" c'
     assert program.declaration("v").value == ((1.5, True), ("x", -2.0))
+
+
+def test_an_editor_renders_the_same_bytes_after_letting_the_program_go():
+    """`release_program` keeps only what rendering needs (the source text, its encoding
+    and line endings): the bytes are the same, and the program itself is gone."""
+    import gc
+    import weakref
+
+    def edited(release: bool) -> tuple[bytes, bool]:
+        program = parse_program(CRLF_CP1252)
+        editor = Editor(program)
+        motion = program.motions[0]
+        editor.replace(motion.span, "MoveAbsJ jt_°, v100, z10, tool0;")
+        editor.insert_declaration(program.modules[0], "CONST num n:=1;\n! zwei Zeilen")
+        ref = weakref.ref(program)
+        if release:
+            editor.release_program()
+        del program, motion
+        return editor.render(), ref() is None
+
+    gc.disable()  # gone by reference counts alone, as in the rewrite
+    try:
+        kept, kept_gone = edited(False)
+        released, released_gone = edited(True)
+    finally:
+        gc.enable()
+    assert released == kept and (kept_gone, released_gone) == (False, True)
+    assert b"jt_\xb0, v100" in released
+    assert b"\r\n  CONST num n:=1;\r\n  ! zwei Zeilen\r\n" in released
+
+
+@pytest.mark.parametrize("source", [
+    "MODULE M\n  VAR num a;\n  PROC p()\n  ENDPROC\nENDMODULE\n",
+    "MODULE M\r\n\tVAR num a;\r\nENDMODULE",  # CRLF, a tab, no final line end
+    "MODULE M\nENDMODULE",  # no declaration: after the MODULE line, at the end of the file
+])
+@pytest.mark.parametrize("lines", [
+    ["CONST num b:=1;"],
+    ["CONST num b:=1;", "LOCAL CONST num c:=2;", "! ° ok"],
+    ["CONST num b:=1;", "", "CONST num c:=2;"],  # an empty line gets no indentation
+    ["CONST num b:=1;", "! two\nlines"],
+])
+def test_declarations_given_as_lines_are_written_as_their_joined_text(source, lines):
+    """`insert_declaration` takes the lines of what it inserts (kept as they are until the
+    output renders, not joined into one more string): the bytes are those of the joined
+    text, whatever the line ends, indentation and end of the file."""
+    def rendered(text) -> bytes:
+        program = parse_program(source)
+        editor = Editor(program)
+        editor.insert_declaration(program.modules[0], text)
+        return editor.render()
+
+    joined = rendered("\n".join(lines))
+    assert rendered(list(lines)) == joined
+    if source.startswith("MODULE M\n  VAR") and len(lines) == 3 and "" in lines:
+        assert joined == (b"MODULE M\n  VAR num a;\n  CONST num b:=1;\n\n  CONST num c:=2;\n"
+                          b"  PROC p()\n  ENDPROC\nENDMODULE\n")
