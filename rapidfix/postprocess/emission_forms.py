@@ -6,13 +6,16 @@ Each form is written out for speed and has a general counterpart it must equal
 - jointtarget literals for many targets at once, their digits built in numpy for the
   whole block (`micro_units`, `_joint_blocks`) — exactly the text
   `rapidfix.rapid.format.format_jointtarget` gives for each;
-- robtarget literals, as `format_robtarget` writes them;
+- robtarget literals, as `format_robtarget` writes them, their positions and
+  orientations likewise built in numpy (`number_rows`);
 - the jointtarget declaration, `format_declaration("CONST", "jointtarget", ...)`;
 - a MoveL/MoveJ/MoveC statement turned into MoveAbsJ (`joint_statement`), the
   statement `statement_variant` makes from the general edits (`joint_edits`).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -37,21 +40,56 @@ _DEC_KEEP = np.array([[c < n for c in range(6)] for n in range(7)], bool)
 _BLOCK_ROWS = 1 << 14
 
 
-def micro_units(x: np.ndarray) -> np.ndarray:
-    """x (|x| < 1e8) in millionths, rounded exactly as `'%.6f' % x` rounds (int64).
+def micro_units(x: np.ndarray, decimals: int = 6) -> np.ndarray:
+    """x (|x| < 1e8) in units of 10^-decimals (millionths by default), rounded exactly as
+    `'%.{decimals}f' % x` rounds (int64).
 
-    `rint(x * 1e6)` is that rounding unless the product lies within its own rounding
-    error of a half; those few numbers are formatted by Python and read back.
+    `rint(x * 10^decimals)` is that rounding unless the product lies within its own
+    rounding error of a half; those few numbers are formatted by Python and read back.
     """
-    y = x * 1e6
+    y = x * 10.0 ** decimals
     m = np.rint(y)
     near = np.abs(np.abs(y - m) - 0.5) <= np.abs(y) * 1e-15 + 1e-9
     m = m.astype(np.int64)
     if near.any():
         flat = m.reshape(-1)
         idx = np.flatnonzero(near.ravel())
-        flat[idx] = [int(f"{v:.6f}".replace(".", "")) for v in x.ravel()[idx].tolist()]
+        flat[idx] = [int(f"{v:.{decimals}f}".replace(".", ""))
+                     for v in x.ravel()[idx].tolist()]
     return m
+
+
+_POWERS = 10 ** np.arange(16, dtype=np.int64)
+
+
+def number_rows(x: np.ndarray, decimals: int) -> list[str] | None:
+    """`a,b,c` for each row of x (K,n), every number as `format_num(v, decimals)` writes
+    it, built for all rows at once (sign, digits, '.', decimals, separator as bytes, and
+    a mask of those a number writes); None when a number is not finite or not below
+    1e8 (written with an exponent: format_num's)."""
+    rows, n = x.shape
+    if not (np.isfinite(x).all() and (np.abs(x) < 1e8).all()):
+        return None
+    m = micro_units(x, decimals).reshape(-1)
+    whole, frac = np.divmod(np.abs(m), _POWERS[decimals])
+    if len(whole) and whole.max() >= _POWERS[8]:  # rounded up to 1e8
+        return None
+    width = 11 + decimals  # sign, 8 digits, '.', decimals, separator
+    chars = np.empty((len(m), width), np.uint8)
+    chars[:, 0] = ord("-")
+    chars[:, 1:9] = whole[:, None] // _POWERS[7::-1] % 10 + ord("0")
+    chars[:, 9] = ord(".")
+    chars[:, 10:-1] = frac[:, None] // _POWERS[decimals - 1::-1] % 10 + ord("0")
+    chars[:, -1] = ord(",")
+    chars[n - 1::n, -1] = ord("\n")
+    n_int = 1 + (whole[:, None] >= _POWERS[1:8]).sum(axis=1)
+    n_dec = decimals - (frac[:, None] % _POWERS[1:decimals + 1] == 0).sum(axis=1)
+    keep = np.ones((len(m), width), bool)
+    keep[:, 0] = m < 0  # a number that rounds to 0 is written '0'
+    keep[:, 1:9] = np.arange(8) >= 8 - n_int[:, None]
+    keep[:, 9] = n_dec > 0
+    keep[:, 10:-1] = np.arange(decimals) < n_dec[:, None]
+    return chars[keep].tobytes().decode("ascii").split("\n")[:rows]
 
 
 def _joint_blocks(q_deg: np.ndarray) -> list[str]:
@@ -122,14 +160,36 @@ def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
     return out
 
 
+def _distinct_texts(rows: np.ndarray, text: Callable[[list], str]) -> list[str]:
+    """text(row) for each row of `rows` (K,n), each distinct row written once."""
+    if not len(rows):
+        return []
+    if (rows == rows[0]).all():
+        distinct, inverse = rows[:1], np.zeros(len(rows), int)
+    else:
+        distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
+    texts = [text(row) for row in distinct.tolist()]
+    return [texts[i] for i in inverse.reshape(-1).tolist()]
+
+
 def robtarget_literals(tcp: np.ndarray, conf: np.ndarray, extax: np.ndarray) -> list[str]:
-    """Robtarget literals for TCP poses (K,4,4) in their work objects, confdata (K,4)."""
-    pos, quat = pose_to_pos_quat(np.asarray(tcp, dtype=float)) if len(tcp) else ([], [])
-    return [
-        format_robtarget(p, q, c, e)
-        for p, q, c, e in zip(np.asarray(pos).tolist(), np.asarray(quat).tolist(),
-                              np.asarray(conf).tolist(), np.asarray(extax).tolist())
-    ]
+    """Robtarget literals for TCP poses (K,4,4) in their work objects, confdata (K,4):
+    what `format_robtarget` writes, the positions and orientations of all rows built at
+    once (number_rows), confdata and external axes once per distinct row."""
+    if not len(tcp):
+        return []
+    pos, quat = pose_to_pos_quat(np.asarray(tcp, dtype=float))
+    conf, extax = np.asarray(conf), np.asarray(extax, dtype=float)
+    trans = number_rows(np.asarray(pos, dtype=float), 4)
+    rot = number_rows(np.asarray(quat, dtype=float), 9)
+    if trans is None or rot is None:  # a number written with an exponent
+        return [format_robtarget(p, q, c, e)
+                for p, q, c, e in zip(np.asarray(pos).tolist(), np.asarray(quat).tolist(),
+                                      conf.tolist(), extax.tolist())]
+    confs = _distinct_texts(conf, lambda row: "[" + ",".join(str(int(c)) for c in row) + "]")
+    axes = _distinct_texts(extax, lambda row: "[" + ",".join(format_num(v, 4) for v in row)
+                           + "]]")
+    return [f"[[{t}],[{r}],{c},{e}" for t, r, c, e in zip(trans, rot, confs, axes)]
 
 
 def jointtarget_declaration(name: str, literal: str) -> str:

@@ -100,3 +100,51 @@ def test_jointtarget_literals_built_in_blocks_of_rows_are_those_of_one_block(mon
     for rows in (1, 7, 53, 64):
         monkeypatch.setattr(forms, "_BLOCK_ROWS", rows)
         assert forms.jointtarget_literals(q, extax) == want
+
+
+position_values = st.one_of(
+    st.floats(-5000, 5000, allow_nan=False),
+    st.sampled_from([0.0, -0.0, 5e-5, -5e-5, 0.00015, 2.00005, -0.00001, 1e-10, 12.5,
+                     1e7, -99999999.99999, 1e8, 3e9]),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(*[position_values] * 3), min_size=1, max_size=8),
+       st.sampled_from([4, 6, 9]))
+def test_number_rows_are_what_format_num_writes(rows, decimals):
+    from rapidfix.postprocess.emission_forms import number_rows
+    from rapidfix.rapid.format import format_num
+
+    x = np.array(rows)
+    got = number_rows(x, decimals)
+    if got is None:  # a number format_num writes with an exponent, or 1e8 after rounding
+        assert any(abs(round(v, decimals)) >= 1e8 for row in rows for v in row)
+        return
+    assert got == [",".join(format_num(v, decimals) for v in row) for row in rows]
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.tuples(st.tuples(*[position_values] * 3),
+                          st.floats(0, 2 * np.pi), st.floats(-1, 1), st.floats(0, 2 * np.pi),
+                          st.tuples(*[st.integers(-4, 4)] * 3), st.integers(0, 7),
+                          st.sampled_from([9e9, 0.0, -12.25, 1e-5])),
+                min_size=1, max_size=6))
+def test_robtarget_literals_are_what_format_robtarget_writes(rows):
+    from scipy.spatial.transform import Rotation
+
+    from rapidfix.kinematics import pose_to_pos_quat
+    from rapidfix.postprocess.emission_forms import robtarget_literals
+    from rapidfix.rapid.format import format_robtarget
+
+    k = len(rows)
+    tcp = np.tile(np.eye(4), (k, 1, 1))
+    tcp[:, :3, 3] = [r[0] for r in rows]
+    tcp[:, :3, :3] = Rotation.from_euler(
+        "zyz", [(a, np.arccos(c), b) for _, a, c, b, *_ in rows]).as_matrix()
+    conf = np.array([(*r[4], r[5]) for r in rows])
+    extax = np.array([[r[6]] * 3 + [9e9] * 3 for r in rows])
+    pos, quat = pose_to_pos_quat(tcp)
+    want = [format_robtarget(p, q, c, e) for p, q, c, e in
+            zip(pos.tolist(), quat.tolist(), conf.tolist(), extax.tolist())]
+    assert robtarget_literals(tcp, conf, extax) == want
