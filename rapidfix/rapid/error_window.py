@@ -25,6 +25,8 @@ _ROUTINE_END = re.compile(r"^[ \t]*(ENDPROC|ENDFUNC|ENDTRAP)\b", re.I | re.M)
 _DATA = re.compile(r"^[ \t]*(?:(?:LOCAL|TASK)[ \t]+)*(CONST|VAR|PERS|RECORD|ALIAS)\b",
                    re.I | re.M)
 _MODULE = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(?:\r\n|\r|\n)", re.I | re.M)
+_RECORD = re.compile(r"^[ \t]*(?:LOCAL[ \t]+)?(RECORD)\b", re.I | re.M)
+_RECORD_END = re.compile(r"^[ \t]*(ENDRECORD)\b", re.I | re.M)
 _NOT_BREAK = re.compile(r"[^\r\n]+")
 # Below this many characters left out, the plain grammar may as well read it all.
 _WORTH = 20_000
@@ -73,11 +75,19 @@ def window(text: str, error_at: int) -> Window | None:
         head = match.end()
     if cut < 0 or head < 0 or cut - head < _WORTH:
         return None
+    # The contextual lexer reads PROC or VAR as a name where the keyword cannot stand
+    # (a record's field type, a call's name in a routine): the cut is a module item only
+    # when every routine and record before it, in its module, is closed.
+    for opening, closing in ((_ROUTINE, _ROUTINE_END), (_RECORD, _RECORD_END)):
+        if (sum(1 for _ in opening.finditer(text, head, cut))
+                != sum(1 for _ in closing.finditer(text, head, cut))):
+            return None
     blank = _NOT_BREAK.sub(lambda m: " " * len(m.group()), text[head:cut])
     return Window(text[:head] + blank + text[cut:], cut)
 
 
-def confirms(window_err: UnexpectedInput, win: Window) -> bool:
-    """Whether the plain grammar's error in the window is past the cut: then it took the
-    item's keyword in the window too, and the error is the whole text's."""
-    return error_offset(window_err, win.text) > win.cut
+def confirms(window_err: UnexpectedInput, win: Window, error_at: int) -> bool:
+    """Whether the plain grammar met its error in the window where the whole text's
+    parser met it (`error_at`), past the cut: then it took the item's keyword in the
+    window too, and the error is the whole text's."""
+    return error_offset(window_err, win.text) == error_at > win.cut

@@ -129,7 +129,9 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
     value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
              f"|{quick}|{string}|(?!{quick})(?:{term}{follow})+)")
-    arguments = rf"(?:{argument(value)}(?:{WS}*,{WS}*(?!;)|{WS}*(?=[\\;])))+"
+    # a separator is refused before the list's end however much space stands between
+    # (`Foo 1, ;` is not RAPID)
+    arguments = rf"(?:{argument(value)}(?:{WS}*,(?!{WS}*;){WS}*|{WS}*(?=[\\;])))+"
     return {"value": value, "arguments": arguments, "selectors": postfix(simple)}
 
 

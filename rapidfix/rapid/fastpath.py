@@ -783,11 +783,12 @@ def parse_text(text: str) -> s.SourceFile:
     except NotFast:
         return rapid_parser().parse(text)
     except UnexpectedInput as err:
-        win = window(text, error_offset(err, text))
+        error_at = error_offset(err, text)
+        win = window(text, error_at)
     if win is not None:
         try:
             rapid_parser().parse(win.text)
         except UnexpectedInput as err:
-            if confirms(err, win):
+            if confirms(err, win, error_at):
                 raise
     return rapid_parser().parse(text)

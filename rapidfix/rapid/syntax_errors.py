@@ -135,12 +135,13 @@ def explain(source: SourceText, fallback: UnexpectedInput) -> RapidSyntaxError:
     `fallback` is the plain grammar's error, met having read everything before it, so
     the re-parse may read the error's window (rapid.error_window) instead of the file."""
     text = source.text
-    win = window(text, error_offset(fallback, text))
+    error_at = error_offset(fallback, text)
+    win = window(text, error_at)
     for candidate in ([win.text] if win is not None else []) + [text]:
         try:
             diagnosis_parser().parse(candidate)
         except UnexpectedInput as err:
-            if win is None or candidate is text or confirms(err, win):
+            if win is None or candidate is text or confirms(err, win, error_at):
                 return translate(err, source, _accepted(err))
     return translate(fallback, source)  # pragma: no cover - both parsers share a grammar
 

@@ -102,3 +102,22 @@ def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch)
 def test_no_window_when_little_would_be_left_out():
     text = "MODULE M\n  PROC main()\n    MoveL p1 v100;\n  ENDPROC\nENDMODULE\n"
     assert error_window.window(text, text.index("v100")) is None
+
+
+@pytest.mark.parametrize("inside", [
+    "  RECORD partinfo\n    string name;\n   PROC p() bool Stop;\n  ENDRECORD\n",  # a field's type
+    "  PROC main()\n    Stop;\n    PROC p(1 x;\n  ENDPROC\n",  # a call's name
+    "  PROC main()\n    VAR num n:=1;\n    Stop;\n    VAR num m:= ;\n  ENDPROC\n",
+])
+def test_a_keyword_the_lexer_read_as_a_name_is_no_cut(any_window, monkeypatch, inside):
+    """Found by the property test: where the keyword cannot stand (a record's field
+    type, a call's name), the contextual lexer reads `PROC` or `VAR` as a name; the line
+    is then no module item and the text before it must not be blanked."""
+    head = "MODULE M\n  CONST num k:=1;\n  PROC a()\n    Stop;\n  ENDPROC\n"
+    text = head + inside + "ENDMODULE\n"
+    windowed = _outcome(text)
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "window", lambda _text, _at: None)
+        m.setattr(syntax_errors, "window", lambda _text, _at: None)
+        assert windowed == _outcome(text)
+    assert windowed.startswith("t.mod:")

@@ -250,3 +250,14 @@ def test_the_reader_builds_the_grammars_expression_or_gives_up(text):
     assert expected is not None, text
     call = rapid_parser().parse(routine(f"Foo {text};")).modules[0].items[0].body[0]
     assert len(call.args) == 1 and shape(node) == shape(call.args[0].value)
+
+
+@pytest.mark.parametrize("statement", ["Foo -1, ;", "Foo a,\n  ;", "MoveL p1, v100, z1, tool0, ;",
+                                       "x := 1, ;", "Foo \\A:=1,\t;"])
+def test_a_separator_before_the_end_is_refused_as_the_grammar_refuses_it(statement):
+    # found by a random-statement comparison: the fast terminal took `Foo -1, ;` (the
+    # separator's look-ahead for ';' did not see past the space), the grammar refuses it
+    text = routine("Stop;", statement, "Stop;")
+    with pytest.raises(UnexpectedInput):
+        plain_tree(text)
+    assert_parses_as_plain(text)
