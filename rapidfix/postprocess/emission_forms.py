@@ -133,16 +133,21 @@ def _joint_blocks(q_deg: np.ndarray) -> list[str]:
     return line[kept].tobytes().decode("ascii").split("\n")[:-1]
 
 
+def _distinct_texts(rows: np.ndarray, text: Callable[[list], str]) -> list[str]:
+    """text(row) for each row of `rows` (K,n), each distinct row written once."""
+    if not len(rows):
+        return []
+    if (rows == rows[0]).all():
+        distinct, inverse = rows[:1], np.zeros(len(rows), int)
+    else:
+        distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
+    texts = [text(row) for row in distinct.tolist()]
+    return [texts[i] for i in inverse.reshape(-1).tolist()]
+
+
 def _extax_texts(extax: np.ndarray) -> list[str]:
     """`[e1,...,e6]]` for each row of extax (K,6); each distinct row formatted once."""
-    if not len(extax):
-        return []
-    if (extax == extax[0]).all():  # the usual case: the same axes (or none) everywhere
-        rows, inverse = extax[:1], np.zeros(len(extax), int)
-    else:
-        rows, inverse = np.unique(extax, axis=0, return_inverse=True)
-    texts = ["[" + ",".join(format_num(v) for v in row) + "]]" for row in rows.tolist()]
-    return [texts[i] for i in inverse.reshape(-1).tolist()]
+    return _distinct_texts(extax, lambda row: "[" + ",".join(map(format_num, row)) + "]]")
 
 
 def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
@@ -158,18 +163,6 @@ def jointtarget_literals(q_deg: np.ndarray, extax: np.ndarray) -> list[str]:
         out += map(str.__add__, _joint_blocks(q_deg[a:a + _BLOCK_ROWS]),
                    ext_text[a:a + _BLOCK_ROWS])
     return out
-
-
-def _distinct_texts(rows: np.ndarray, text: Callable[[list], str]) -> list[str]:
-    """text(row) for each row of `rows` (K,n), each distinct row written once."""
-    if not len(rows):
-        return []
-    if (rows == rows[0]).all():
-        distinct, inverse = rows[:1], np.zeros(len(rows), int)
-    else:
-        distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
-    texts = [text(row) for row in distinct.tolist()]
-    return [texts[i] for i in inverse.reshape(-1).tolist()]
 
 
 def robtarget_literals(tcp: np.ndarray, conf: np.ndarray, extax: np.ndarray) -> list[str]:

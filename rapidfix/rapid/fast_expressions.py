@@ -58,6 +58,10 @@ _CHUNK = (rf"(?:[^,;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}|{_nested('
 VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
 
 
+# What closes a list (and what may follow its last item) in the patterns below.
+_BRACE, _BRACKET, _PAREN, _PAREN_ENDS = r"\}", r"\]", r"\)", r"[\\)]"
+
+
 def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: str,
                         word_end: str, aggregates: tuple[str, str]) -> dict[str, str]:
     """Lexer patterns of the fast terminals' values: `value` (of a procedure call's
@@ -84,9 +88,14 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
               rf"|(?=[,;)}}\]\\]))")
     number = f"(?=[0-9.])(?:{NUMBER})"
 
+    def items(item: str, close: str, ends: str) -> str:
+        """One `item` of a comma-separated list, with its separator, or the look at what
+        ends the list (`close`, the closing character; `ends`, those that may follow)."""
+        return rf"(?:{item}(?:{WS}*,{WS}*(?!{close})|{WS}*(?={ends})))"
+
     def postfix(item: str) -> str:
         """Components and array indices (`.x`, `{i, 2}`) after an operand."""
-        index = rf"\{{{WS}*(?:{item}(?:{WS}*,{WS}*(?!\}})|{WS}*(?=\}})))+\}}"
+        index = rf"\{{{WS}*{items(item, _BRACE, _BRACE)}+\}}"
         return rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
 
     # an operand inside a function call or an index: its indices numbers or names
@@ -109,8 +118,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
 
     def call_list(item: str) -> str:
         """A function call's parenthesised arguments, each `item` or an optional one."""
-        return (rf"\({WS}*(?:{argument(item)}"
-                rf"(?:{WS}*,{WS}*(?!\))|{WS}*(?=[\\)])))*\)")
+        return rf"\({WS}*{items(argument(item), _PAREN, _PAREN_ENDS)}*\)"
 
     # Where two alternatives take the same text (`1` is quick and simple, `[1,2]` loose
     # and a group), the later one is guarded by a look-ahead refusing the earlier:
@@ -124,9 +132,9 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     paren = rf"\({WS}*{simple}{WS}*\)"
     term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
             rf"|{paren})")
-    group = rf"\[{WS}*(?:{simple}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
+    group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
-    aggregate = rf"\[{WS}*(?:{item}(?:{WS}*,{WS}*(?!\])|{WS}*(?=\])))+\]"
+    aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
     value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
              f"|{quick}|{string}|(?!{quick})(?:{term}{follow})+)")
     # a separator is refused before the list's end however much space stands between
