@@ -7,8 +7,9 @@ The fast terminals (`fastpath`) take such values through the patterns made here,
 `read_expression` turns a value's text into the nodes rapid.lark and
 transform.SyntaxBuilder build for it: unary `+` / `-` chains, `+ - * / DIV MOD` with
 the grammar's precedence (sum < term < factor < postfix) and left associativity,
-parentheses, numbers, names, array elements `a{i}`, record components `a.b.c`,
-function calls, numeric aggregates and aggregates of expressions.
+parentheses, numbers, strings (`"Count: " + NumToStr(n,0)`), names, array elements
+`a{i}`, record components `a.b.c`, function calls, numeric aggregates and aggregates
+of expressions.
 
 The lexer's patterns decide which statements a run takes and check their argument
 lists (fastpath splits those without checking them again). A value that is not one
@@ -32,7 +33,7 @@ import sys
 from collections.abc import Callable
 
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.transform import number_value, numeric_aggregate_value
+from rapidfix.rapid.transform import number_value, numeric_aggregate_value, string_value
 
 # The grammar's WHITESPACE, NUMBER and NUMERIC_AGGREGATE (checked against rapid.lark
 # by expression_patterns, whenever the fast terminals are made).
@@ -42,6 +43,9 @@ _N = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
                      rf"(?:\s*,\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\]))*\s*\]")
 _LATIN1 = "\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+# The grammar's STRING: `""` stands for a quote; backslashes and every separator may
+# stand inside.
+STRING = r'"(?:[^"\r\n]|"")*"'
 
 
 def _nested(open_: str, close: str) -> str:
@@ -51,10 +55,12 @@ def _nested(open_: str, close: str) -> str:
     return rf"{o}{other}(?:{o}{other}(?:{o}{other}{c}{other})*{c}{other})*{c}"
 
 
-# A value in text the lexer has checked: pieces without whitespace or separators,
-# and bracketed groups, with whitespace between them (but not after the last).
-_CHUNK = (rf"(?:[^,;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}|{_nested('[', ']')}"
-          rf"|{_nested('{', '}')})")
+# A value in text the lexer has checked: strings, pieces without whitespace or
+# separators, and bracketed groups (which hold no string: the patterns below take
+# strings only outside parentheses and brackets), with whitespace between them (but not
+# after the last).
+_CHUNK = (rf"(?:{STRING}|[^\",;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}"
+          rf"|{_nested('[', ']')}|{_nested('{', '}')})")
 VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
 
 
@@ -75,16 +81,19 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     (two levels, three levels). `terminals` holds rapid.lark's regular expressions by
     terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
-    if (terminals["NUMBER"], terminals["NUMERIC_AGGREGATE"], spaces) != (
-            NUMBER, NUMERIC_AGGREGATE, set(" \t\f\v\r\n\x1a")):  # pragma: no cover
-        raise ValueError("rapid.lark's numbers or whitespace changed; update fast_expressions")
+    # (Lark gives the grammar's \r and \n as the characters themselves)
+    string = STRING.replace(r"\r", "\r").replace(r"\n", "\n")
+    if (terminals["NUMBER"], terminals["NUMERIC_AGGREGATE"], terminals["STRING"], spaces) != (
+            NUMBER, NUMERIC_AGGREGATE, string, set(" \t\f\v\r\n\x1a")):  # pragma: no cover
+        raise ValueError("rapid.lark's numbers, strings or whitespace changed; "
+                         "update fast_expressions")
     loose, deep = aggregates
     signs = r"(?:[-+][-+ \t\f\v\r\n\x1a]*)?"
     # Each list below is written once: an element, then its separator or a look at what
     # ends the list. Look-aheads on the next character spare the regular expression
     # engine the alternatives that cannot match (most values are single names).
     # After an operand: an operator and the start of a further operand, or the end.
-    follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(])"
+    follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(\"])"
               rf"|(?=[,;)}}\]\\]))")
     number = f"(?=[0-9.])(?:{NUMBER})"
 
@@ -106,10 +115,9 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # most are
     quick = (rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z])(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
              rf"(?={WS}*[,;)\\])")
-    # a string as a whole value, without the characters that split statements and
-    # arguments, nor quotes or backslashes (escapes); a string in a sum or a function
-    # call's argument is left to the grammar
-    string = rf'"[^"\\\r\n;,()\[\]{{}}]*"(?={WS}*[,;\\])'
+    # a string as a whole value (a string in a function call's argument, an aggregate or
+    # parentheses is left to the grammar; one in a sum is an operand of `term`)
+    string = rf"{STRING}(?={WS}*[,;\\])"
 
     def argument(value: str) -> str:
         """`\\Name:=` or nothing before a value, or a switch `\\Name`."""
@@ -131,12 +139,12 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})")
     paren = rf"\({WS}*{simple}{WS}*\)"
     term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
-            rf"|{paren})")
+            rf"|{paren}|{STRING})")
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
     value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
-             f"|{quick}|{string}|(?!{quick})(?:{term}{follow})+)")
+             f"|{quick}|{string}|(?!{quick}|{string})(?:{term}{follow})+)")
     # a separator is refused before the list's end however much space stands between
     # (`Foo 1, ;` is not RAPID)
     arguments = rf"(?:{argument(value)}(?:{WS}*,(?!{WS}*;){WS}*|{WS}*(?=[\\;])))+"
@@ -159,6 +167,7 @@ class NotRead(Exception):
 _SPACE = re.compile(f"{WS}*")
 _WS_CHARS = frozenset(" \t\f\v\r\n\x1a")
 _NUMBER = re.compile(NUMBER)
+_STRING = re.compile(STRING)
 _WORD = re.compile(f"[A-Za-z{_LATIN1}][A-Za-z0-9_{_LATIN1}]*")
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
 _OPERAND_KEYWORDS = frozenset(("TRUE", "FALSE", "NOT"))
@@ -258,6 +267,12 @@ class _Reader:
                 raise NotRead(text)
             self.pos = m.end()
             return s.Number(base + pos, base + m.end(), number_value(m.group()), m.group())
+        if char == '"':
+            m = _STRING.match(text, pos)
+            if m is None:
+                raise NotRead(text)
+            self.pos = m.end()
+            return s.String(base + pos, base + m.end(), string_value(m.group()))
         if char == "(":
             self.pos += 1
             inner = self.expression()
@@ -395,5 +410,5 @@ def moved(node: s.Expr, shift: int, move: Callable[[s.Expr, int], s.Expr]) -> s.
     return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
 
 
-__all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "VALUE_TEXT",
-           "WS", "NotRead", "expression_patterns", "moved", "read_expression"]
+__all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "STRING",
+           "VALUE_TEXT", "WS", "NotRead", "expression_patterns", "moved", "read_expression"]

@@ -58,6 +58,7 @@ from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.fast_expressions import (
     MOVED_BY_FAST_EXPRESSIONS,
     PLAIN_VALUE,
+    STRING,
     NotRead,
     expression_patterns,
     moved,
@@ -66,7 +67,12 @@ from rapidfix.rapid.fast_expressions import (
 from rapidfix.rapid.fast_expressions import VALUE_TEXT as _EXPRESSION_TEXT
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
 from rapidfix.rapid.lexer_patterns import share_large_patterns
-from rapidfix.rapid.transform import SyntaxBuilder, number_value, numeric_aggregate_value
+from rapidfix.rapid.transform import (
+    SyntaxBuilder,
+    number_value,
+    numeric_aggregate_value,
+    string_value,
+)
 
 # Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
 WS = r"[ \t\f\v\r\n\x1a]"
@@ -331,9 +337,8 @@ def _value_node(text: str, start: int) -> s.Expr:
     from fast_expressions."""
     if len(text) <= 5 and text.upper() in _BOOLS:
         return s.Bool(start, start + len(text), _BOOLS[text.upper()])
-    if text[0] == '"' and text[-1] == '"' and text.count('"') == 2:
-        # a whole string (the lexer pattern takes none with escapes)
-        return s.String(start, start + len(text), text[1:-1])
+    if text[0] == '"' and _WHOLE_STRING.fullmatch(text):
+        return s.String(start, start + len(text), string_value(text))
     if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
         try:
             return read_expression(text, start)
@@ -364,6 +369,7 @@ def _value_node(text: str, start: int) -> s.Expr:
     return s.NameRef(start, end, sys.intern(text))
 
 
+_WHOLE_STRING = re.compile(STRING)
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.
 _PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
 # An index of an array element, or a dimension: a number or a name.
@@ -428,6 +434,8 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
 _CALL_HEAD = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
+# The rest of a checked statement, up to its ';' (strings may hold one).
+_STATEMENT_END = re.compile(rf'(?:[^;"]+|{STRING})*;')
 # Distinct argument tails kept (a CAM program has a few dozen).
 TAIL_LIMIT = 4096
 
@@ -546,12 +554,15 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     tails = _TAILS
     argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
     head, find, piece_at = _CALL_HEAD.match, text.index, CALL_PIECE.match
+    quote, statement_end = text.find, _STATEMENT_END.match
     pos, size = 0, len(text)
     while pos < size:
         m = head(text, pos)
         first = m.group(2)
         tail_at = m.end()
         pos = find(";", tail_at) + 1
+        if quote('"', tail_at, pos) >= 0:  # a string may hold ';'
+            pos = statement_end(text, tail_at).end()
         tail_text = text[tail_at:pos]
         if first is None or first[0] in ":.{":  # an assignment, or a call without one
             name_end = m.end(1)

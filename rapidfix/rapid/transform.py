@@ -33,7 +33,7 @@ def number_value(text: str) -> float:
     return float(text)
 
 
-def _string(text: str) -> str:
+def string_value(text: str) -> str:
     """Decode a RAPID string literal: "" is a quote, \\\\ a backslash, \\hh a byte."""
     body = text[1:-1]
     if '"' not in body and "\\" not in body:
@@ -75,7 +75,7 @@ class SyntaxBuilder(Transformer):
         return s.Number(tok.start_pos, tok.end_pos, number_value(tok), str(tok))
 
     def string(self, tok: Token) -> s.String:
-        return s.String(tok.start_pos, tok.end_pos, _string(tok))
+        return s.String(tok.start_pos, tok.end_pos, string_value(tok))
 
     def true(self, tok: Token) -> s.Bool:
         return s.Bool(tok.start_pos, tok.end_pos, True)

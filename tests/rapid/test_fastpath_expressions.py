@@ -60,6 +60,11 @@ READ_FAST = [
     'TPWrite "Count " \\Num:=nCount;',
     'Foo "", 1, "a b", "!x:=1";',
     'ErrWrite "Error", "Part missing" \\RL2:="check it";',
+    # strings holding separators, brackets, doubled quotes and backslashes; strings in sums
+    'TPWrite "Point 1, going to p1; ok";',
+    'TPWrite "say ""hi"" \\41 (x) [y] {z} !c";',
+    'TPWrite "Count: " + NumToStr(nCount,0) + "; mm", "a,b" \\Num:=n;',
+    'Foo "a;b";',
 ]
 
 ASSIGNMENTS = [
@@ -71,6 +76,7 @@ ASSIGNMENTS = [
     "reg1 := reg1 DIV 2;",
     "p := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     's := "abc";',
+    's:="x;y" + s + "z,w";',
     "bDone := TRUE;",
     "b{2} := false;",
 ]
@@ -132,7 +138,8 @@ def test_moves_with_expressions_build_the_plain_model():
 
 
 @pytest.mark.parametrize("text", ["a AND b", "a <> b", "TRUE", "a+NOT b", "f(x:=1)",
-                                  "f(\\A?B)", "0x1DIV 2", "a b", "a.5", '"s"', "(a", "a)"])
+                                  "f(\\A?B)", "0x1DIV 2", "a b", "a.5", '"s', '"a"b', "(a",
+                                  "a)"])
 def test_the_reader_gives_up_on_what_it_does_not_build(text):
     with pytest.raises(NotRead):
         read_expression(text, 0)
@@ -172,7 +179,7 @@ def expression(draw: st.DrawFn, depth: int = 0) -> str:
     """Text of an expression: mostly valid RAPID arithmetic, sometimes not (a keyword
     as an operand, a missing operand), so that both routes must agree on refusing too."""
     sp = lambda: draw(SPACE)  # noqa: E731
-    kinds = ["name", "number", "name", "number", "keyword"]
+    kinds = ["name", "number", "name", "number", "keyword", "string"]
     if depth < 3:
         kinds += ["binary", "binary", "binary", "unary", "paren", "index", "component",
                   "call", "aggregate"]
@@ -183,6 +190,8 @@ def expression(draw: st.DrawFn, depth: int = 0) -> str:
         return draw(st.sampled_from(NUMBERS))
     if kind == "keyword":
         return draw(st.sampled_from(KEYWORDS))
+    if kind == "string":
+        return f'"{draw(STRINGS)}"'
     sub = lambda: draw(expression(depth + 1))  # noqa: E731
     if kind == "binary":
         op = draw(st.sampled_from(["+", "-", "*", "/", " DIV ", " MOD ", " div ", "DIV", " AND "]))
@@ -218,7 +227,8 @@ def program_with_expressions(draw: st.DrawFn) -> str:
         f"p.trans{draw(st.sampled_from(['', '.x', '{1}', ' {i, 2}.y', ' . z']))} := {values[-1]};",
         f"n := {', '.join(values)};",
         f"n := \\A:={values[0]};",
-        # strings: whole values read fast, anything else left to the grammar
+        # strings: whole values and operands of sums read fast, anything else left to the
+        # grammar
         f'TPWrite "{draw(STRINGS)}"{draw(SPACE)}\\Num:={values[0]};',
         f's := "{draw(STRINGS)}"{draw(st.sampled_from(["", " + s", ", 1"]))};',
         f'Foo f("{draw(STRINGS)}"), ["a", {values[0]}];',
