@@ -148,7 +148,14 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # a separator is refused before the list's end however much space stands between
     # (`Foo 1, ;` is not RAPID)
     arguments = rf"(?:{argument(value)}(?:{WS}*,(?!{WS}*;){WS}*|{WS}*(?=[\\;])))+"
-    return {"value": value, "arguments": arguments, "selectors": postfix(simple)}
+    # a condition's text (rapid.lark's `expr`), up to the keyword its user puts after
+    # it: strings, optional arguments' `\Name:=`, and any character but those of a
+    # comment, a statement's end, a conditional or named argument (`\A?B`, `f(x:=1)`)
+    # or a placeholder (`<EXP>`), taken as few as can be. The reader checks all of it.
+    condition = (rf"(?:{STRING}|\\{WS}*{plain_name}{WS}*:=|[^;!\"?:<]"
+                 rf"|<(?![A-Za-z]+>))+?")
+    return {"value": value, "arguments": arguments, "selectors": postfix(simple),
+            "condition": condition}
 
 
 # What the reader takes without reading it again: the values fastpath reads itself
@@ -170,7 +177,10 @@ _NUMBER = re.compile(NUMBER)
 _STRING = re.compile(STRING)
 _WORD = re.compile(f"[A-Za-z{_LATIN1}][A-Za-z0-9_{_LATIN1}]*")
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
-_OPERAND_KEYWORDS = frozenset(("TRUE", "FALSE", "NOT"))
+_BOOLS = {"TRUE": True, "FALSE": False}
+_NONE: frozenset[str] = frozenset()
+# LE, GE and NE before LT, GT and EQ: the lexer takes the longest
+_RELATION = re.compile("<>|<=|>=|[<>=]")
 _SUM = frozenset("+-")
 _PRODUCT = frozenset("*/")
 
@@ -221,6 +231,36 @@ class _Reader:
             left = s.Binary(left.start, right.end, op[0], left, right)
         return left
 
+    def condition(self) -> s.Expr:
+        """rapid.lark's `expr`: OR / XOR of AND of NOT of a relation of sums."""
+        return self._chain(self._and, _NONE, ("OR", "XOR"))
+
+    def _and(self) -> s.Expr:
+        return self._chain(self._not, _NONE, ("AND",))
+
+    def _not(self) -> s.Expr:
+        # NOT is a keyword only where the grammar's `not_expr` may start; elsewhere the
+        # contextual lexer reads it as a name, which atom refuses
+        if self._skip() in "nN":
+            word = _WORD.match(self.text, self.pos)
+            if word is not None and word.group().upper() == "NOT":
+                at = self.base + self.pos
+                self.pos = word.end()
+                operand = self._not()
+                return s.Unary(at, operand.end, "NOT", operand)
+        return self._relation()
+
+    def _relation(self) -> s.Expr:
+        """A sum, or two compared (the grammar does not chain relations)."""
+        left = self.expression()
+        self._skip()
+        m = _RELATION.match(self.text, self.pos)
+        if m is None:
+            return left
+        self.pos = m.end()
+        right = self.expression()
+        return s.Binary(left.start, right.end, m.group(), left, right)
+
     def expression(self) -> s.Expr:
         return self._chain(self.term, _SUM, ())
 
@@ -242,10 +282,10 @@ class _Reader:
             char = self._skip()
             if char == "{":
                 self.pos += 1
-                indices = [self.expression()]
+                indices = [self.condition()]
                 while self._skip() == ",":
                     self.pos += 1
-                    indices.append(self.expression())
+                    indices.append(self.condition())
                 node = s.Index(node.start, self._expect("}"), node, indices)
             elif char == ".":
                 self.pos += 1
@@ -275,7 +315,7 @@ class _Reader:
             return s.String(base + pos, base + m.end(), string_value(m.group()))
         if char == "(":
             self.pos += 1
-            inner = self.expression()
+            inner = self.condition()
             return s.Paren(base + pos, self._expect(")"), inner)
         if char == "[":
             m = _AGGREGATE.match(text, pos)
@@ -284,13 +324,19 @@ class _Reader:
                 return s.NumericAggregate(base + pos, base + m.end(),
                                           numeric_aggregate_value(m.group()))
             self.pos += 1
-            items = [self.expression()]
+            items = [self.condition()]
             while self._skip() == ",":
                 self.pos += 1
-                items.append(self.expression())
+                items.append(self.condition())
             return s.Aggregate(base + pos, self._expect("]"), items)
         word = _WORD.match(text, pos) if char else None
-        if word is None or word.group().upper() in _OPERAND_KEYWORDS:
+        if word is None:
+            raise NotRead(text)
+        keyword = word.group().upper()
+        if keyword in _BOOLS:
+            self.pos = word.end()
+            return s.Bool(base + pos, base + word.end(), _BOOLS[keyword])
+        if keyword == "NOT":  # a keyword here only where a condition may start (_not)
             raise NotRead(text)
         self.pos = word.end()
         name = sys.intern(word.group())
@@ -329,14 +375,14 @@ class _Reader:
             value = None
             if self._skip() == ":" and self.text.startswith(":=", self.pos):
                 self.pos += 2
-                value = self.expression()
+                value = self.condition()
                 end = value.end
             elif self.text.startswith("?", self.pos):
                 raise NotRead(self.text)  # a conditional argument: the grammar reads it
             return s.Argument(at, end, "optional", word.group(), value)
         if not required:
             raise NotRead(self.text)
-        value = self.expression()
+        value = self.condition()
         if self._skip() == ":":  # a named required argument: the grammar reads it
             raise NotRead(self.text)
         return s.Argument(value.start, value.end, "required", None, value)
@@ -370,13 +416,13 @@ def _depth(node: s.Node) -> int:
     return deepest
 
 
-def read_expression(text: str, start: int) -> s.Expr:
-    """The node rapid.lark builds for the value `text` standing at offset `start`;
-    NotRead when it is not such a value, exactly and whole, or nests deeper than
-    DEEPEST."""
+def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
+    """The node rapid.lark builds for the value `text` standing at offset `start` (a sum,
+    or with `condition` any `expr`: relations, NOT, AND, OR, XOR); NotRead when it is
+    not such a value, exactly and whole, or nests deeper than DEEPEST."""
     reader = _Reader(text, start)
     try:
-        node = reader.expression()
+        node = reader.condition() if condition else reader.expression()
     except RecursionError:  # nested deeper than Python's stack: the grammar's to read
         raise NotRead(text) from None
     if reader._skip():

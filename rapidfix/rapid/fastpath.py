@@ -25,11 +25,18 @@ signs, `+ - * / DIV MOD`, parentheses, record components and array elements
 `vWeld{i+1}`), and aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those
 values are read by fast_expressions' reader, which follows the grammar's expression
 rules and gives up (NotFast) on anything it does not build exactly. A value may also
-be TRUE or FALSE, or a whole string without escapes, commas, semicolons or brackets
-(`TPWrite "Point reached"`). Anything else in a statement — a comment inside it, a
-relation or logical operator, another keyword, a string in a sum, a named or
-conditional argument, calls nested deeper — ends the run, and that statement is
-parsed by the full grammar as before.
+be TRUE or FALSE, or a string (`TPWrite "Point 1, reached; ok"`, also in a sum:
+`"Count: " + NumToStr(n,0)`). Anything else in a statement — a comment inside it, a
+relation or logical operator, another keyword, a named or conditional argument, calls
+nested deeper — ends the run, and that statement is parsed by the full grammar as
+before.
+
+Four more terminals take the head of a compound statement whole: `IF cond THEN`,
+`ELSEIF cond THEN`, `WHILE cond DO` (FAST_IF, FAST_ELSEIF, FAST_WHILE) and
+`RETURN [value];` (FAST_RETURN). Their patterns only find where the condition ends
+(the fewest characters up to the keyword, no comment, `;`, conditional or named
+argument or placeholder inside); fast_expressions' reader then reads the condition as
+rapid.lark's `expr` (relations, NOT, AND, OR, XOR), or gives up (NotFast).
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -49,7 +56,7 @@ import re
 import sys
 from typing import Any
 
-from lark import Lark, Tree, v_args
+from lark import Lark, Token, Tree, v_args
 from lark.exceptions import UnexpectedInput
 
 from rapidfix.rapid import fast_expressions
@@ -71,6 +78,7 @@ from rapidfix.rapid.transform import (
     SyntaxBuilder,
     number_value,
     numeric_aggregate_value,
+    statements_in,
     string_value,
 )
 
@@ -174,9 +182,20 @@ def _patterns() -> dict[str, str]:
     dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
             f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
-    return {"call": call, "decl": decl}
+    # the heads of IF, ELSEIF and WHILE (their condition up to THEN / DO), and RETURN
+    # with or without a value
+    condition = expression["condition"]
+    # (the keyword after the condition is a whole word: `IF bTHEN THEN`)
+    heads = {kind: rf"(?i:{first}){_WORD_END}{condition}"
+                   rf"(?<![A-Za-z0-9_{_LATIN1_LETTERS}])(?i:{last}){_WORD_END}"
+             for kind, (first, last) in _HEADS.items()}
+    heads["return"] = rf"(?i:RETURN){_WORD_END}(?:{condition})?;"
+    return {"call": call, "decl": decl, **heads}
 
 
+# The statements whose head is one fast token: the keywords before and after the
+# condition (its text is read by fast_expressions.read_expression).
+_HEADS = {"if": ("IF", "THEN"), "elseif": ("ELSEIF", "THEN"), "while": ("WHILE", "DO")}
 _BODY_RULE = "_body: (data_decl | _statement)*"
 #: statements in one fast token at most. Python's regular expression engine keeps a
 #: backtracking record per repetition, so one token for a whole CAM program's hundred
@@ -197,16 +216,22 @@ def grammar_extension(grammar: str) -> str:
     # a run starts with a statement (the gap before the first matches nothing)
     calls = f"(?=[A-Za-z])(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
     decls = f"(?=[A-Za-z])(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
-    if "/" in calls + decls:  # pragma: no cover - a Lark regex literal ends at '/'
-        raise ValueError("a terminal pattern holds '/'")
+    heads = {kind: p[kind] for kind in (*_HEADS, "return")}
+    if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
+        raise ValueError("a terminal pattern holds '/'")  # a Lark regex literal ends at '/'
     return (
-        "\n%extend _statement: _fast_calls\n"
+        "\n%extend _statement: _fast_calls | fast_if_stmt | fast_while_stmt\n"
         "%extend _module_item: _fast_decls\n"
         "%override _body: (data_decl | _fast_decls | _statement)*\n"
+        "%extend elseif_clause: FAST_ELSEIF _statement* -> fast_elseif_clause\n"
+        "%extend return_stmt: FAST_RETURN -> fast_return_stmt\n"
         "_fast_calls: FAST_CALLS\n"
         "_fast_decls: FAST_DECLS\n"
+        "fast_if_stmt: FAST_IF _statement* elseif_clause* else_clause? ENDIF\n"
+        "fast_while_stmt: FAST_WHILE _statement* ENDWHILE\n"
         f"FAST_CALLS.9: /{calls}/\n"
         f"FAST_DECLS.9: /{decls}/\n"
+        + "".join(f"FAST_{kind.upper()}.9: /{pattern}/\n" for kind, pattern in heads.items())
     )
 
 
@@ -730,6 +755,36 @@ class FastSyntaxBuilder(SyntaxBuilder):
     def _fast_decls(self, children: list[Any]) -> Tree:
         tok = children[0]
         return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
+
+    # The heads: the plain rules' nodes, their condition read from the token's text.
+    def fast_if_stmt(self, head: Token, *rest: Any) -> s.If:
+        return self.if_branches(head.start_pos, _condition(head, "IF", "THEN"), rest)
+
+    def fast_elseif_clause(self, head: Token, *body: Any) -> tuple:
+        return ("elseif", _condition(head, "ELSEIF", "THEN"), statements_in(body))
+
+    def fast_while_stmt(self, head: Token, *rest: Any) -> s.While:
+        return s.While(head.start_pos, rest[-1].end_pos, _condition(head, "WHILE", "DO"),
+                       statements_in(rest))
+
+    def fast_return_stmt(self, head: Token) -> s.Return:
+        text = str(head)
+        return s.Return(head.start_pos, head.end_pos,
+                        None if not text[6:-1].strip(_WS_CHARS) else
+                        _condition(head, "RETURN", ";"))
+
+
+def _condition(head: Token, first: str, last: str) -> s.Expr:
+    """The condition (or RETURN's value) in the text of a fast head token, between its
+    keywords `first` and `last`."""
+    text = str(head)
+    inner = text[len(first):len(text) - len(last)]
+    value = inner.strip(_WS_CHARS)
+    start = head.start_pos + len(first) + len(inner) - len(inner.lstrip(_WS_CHARS))
+    try:
+        return read_expression(value, start, condition=True)
+    except NotRead:
+        raise NotFast(value) from None
 
 
 def cached_extension(grammar: str) -> str:

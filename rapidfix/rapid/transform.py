@@ -62,7 +62,8 @@ def numeric_aggregate_value(text: str) -> tuple:
     return tuple(items)
 
 
-def _statements(children: tuple) -> list[s.Statement]:
+def statements_in(children: tuple) -> list[s.Statement]:
+    """The statements among a rule's children (its keywords and clauses left out)."""
     return [c for c in children if isinstance(c, s.Statement)]
 
 
@@ -166,20 +167,26 @@ class SyntaxBuilder(Transformer):
         return s.LateCall(percent.start_pos, rest[-1].end_pos, target, args)
 
     def if_stmt(self, if_: Token, cond: s.Expr, then: Token, *rest: Any) -> s.If:
-        branches: list[tuple[s.Expr, list[s.Statement]]] = [(cond, _statements(rest))]
+        return self.if_branches(if_.start_pos, cond, rest)
+
+    @staticmethod
+    def if_branches(start: int, cond: s.Expr, rest: tuple) -> s.If:
+        """The If node of an IF at `start` with condition `cond`, from what follows its
+        THEN (statements, ELSEIF and ELSE clauses, the ENDIF token)."""
+        branches: list[tuple[s.Expr, list[s.Statement]]] = [(cond, statements_in(rest))]
         otherwise = None
         for item in rest:
             if isinstance(item, tuple) and item[0] == "elseif":
                 branches.append((item[1], item[2]))
             elif isinstance(item, tuple) and item[0] == "else":
                 otherwise = item[1]
-        return s.If(if_.start_pos, rest[-1].end_pos, branches, otherwise)
+        return s.If(start, rest[-1].end_pos, branches, otherwise)
 
     def elseif_clause(self, _kw: Token, cond: s.Expr, _then: Token, *body: Any) -> tuple:
-        return ("elseif", cond, _statements(body))
+        return ("elseif", cond, statements_in(body))
 
     def else_clause(self, _kw: Token, *body: Any) -> tuple:
-        return ("else", _statements(body))
+        return ("else", statements_in(body))
 
     def compact_if(self, if_: Token, cond: s.Expr, statement: s.Statement) -> s.CompactIf:
         return s.CompactIf(if_.start_pos, statement.end, cond, statement)
@@ -188,10 +195,10 @@ class SyntaxBuilder(Transformer):
                  last: s.Expr, *rest: Any) -> s.For:
         step = rest[1] if isinstance(rest[0], Token) and rest[0].type == "STEP" else None
         return s.For(for_.start_pos, rest[-1].end_pos, str(var), first, last, step,
-                     _statements(rest))
+                     statements_in(rest))
 
     def while_stmt(self, while_: Token, cond: s.Expr, _do: Token, *rest: Any) -> s.While:
-        return s.While(while_.start_pos, rest[-1].end_pos, cond, _statements(rest))
+        return s.While(while_.start_pos, rest[-1].end_pos, cond, statements_in(rest))
 
     def test_stmt(self, test: Token, subject: s.Expr, *rest: Any) -> s.Test:
         cases = [item[1:] for item in rest if isinstance(item, tuple) and item[0] == "case"]
@@ -201,10 +208,10 @@ class SyntaxBuilder(Transformer):
 
     def case_clause(self, _case: Token, *rest: Any) -> tuple:
         values = [x for x in rest if not isinstance(x, (s.Statement, Token))]
-        return ("case", values, _statements(rest))
+        return ("case", values, statements_in(rest))
 
     def default_clause(self, _default: Token, *rest: Any) -> tuple:
-        return ("default", _statements(rest))
+        return ("default", statements_in(rest))
 
     def label(self, name: Token, colon: Token) -> s.Label:
         return s.Label(name.start_pos, colon.end_pos, str(name))
@@ -306,17 +313,17 @@ class SyntaxBuilder(Transformer):
 
     def backward_handler(self, kw: Token, *body: Any) -> s.Handler:
         return s.Handler(kw.start_pos, body[-1].end if body else kw.end_pos, "BACKWARD", [],
-                         _statements(body))
+                         statements_in(body))
 
     def error_handler(self, kw: Token, *body: Any) -> s.Handler:
         numbers = body[0] if body and isinstance(body[0], list) else []
-        statements = _statements(body)
+        statements = statements_in(body)
         end = statements[-1].end if statements else kw.end_pos
         return s.Handler(kw.start_pos, end, "ERROR", numbers, statements)
 
     def undo_handler(self, kw: Token, *body: Any) -> s.Handler:
         return s.Handler(kw.start_pos, body[-1].end if body else kw.end_pos, "UNDO", [],
-                         _statements(body))
+                         statements_in(body))
 
     def _routine(self, kind: str, children: tuple) -> s.Routine:
         local = children[0].type == "LOCAL"

@@ -35,6 +35,10 @@ NEAR_MISSES = {
     "Offs arguments": "MoveL Offs(p," + ",".join(["1"] * N) + ") x;",
     "a string at the end": "Foo " + ", ".join(["1"] * N) + ', "end" x;',
     "assignment": "x := " + " ".join(["\\A:=1"] * N) + ";",
+    # the heads' conditions: taken as few characters as can be, up to THEN, DO or ';'
+    "condition without THEN": "IF " + " AND ".join(['f(1) = "a"'] * N) + " ;",
+    "condition without DO": "WHILE " + " OR ".join(["a{1}.b < -1"] * N) + " x;",
+    "RETURN without its end": "RETURN " + " + ".join(["\\A:=1"] * N) + " x",
 }
 
 

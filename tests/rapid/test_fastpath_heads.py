@@ -1,0 +1,186 @@
+"""The heads of IF, ELSEIF and WHILE and the RETURN statement as single fast tokens
+(rapidfix.rapid.fastpath FAST_IF, FAST_ELSEIF, FAST_WHILE, FAST_RETURN): their conditions
+are read by fast_expressions' reader, and the tree must be the plain grammar's, node for
+node, or both routes must refuse the text.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
+from test_fastpath_expressions import expression
+from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
+
+from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fast_expressions import NotRead, read_expression
+from rapidfix.rapid.fastpath import fast_parser
+
+
+def fast_tokens(text: str) -> list[str]:
+    """The types of the fast tokens the fast parser's lexer cuts `text` into."""
+    seen: list[str] = []
+    parser = fast_parser()
+    interactive = parser.parse_interactive(text)
+    for token in interactive.iter_parse():
+        if token.type.startswith("FAST_"):
+            seen.append(token.type)
+    return seen
+
+
+CONDITIONS = [
+    "x > 1 AND NOT bOk OR x=2",
+    "x <> -1 AND x<=3 XOR DInput(di1) = 1",
+    "NOT NOT TRUE",
+    "nCount MOD 2 = 0",
+    "s = \"a;b THEN\" OR s <> \"\"",
+    "a.b{i+1}.c >= (n - 1) * 2",
+    "TestDI(di1) AND NOT TestDI(di2)",
+    "Abs(p.trans.x - CRobT(\\Tool:=tool0 \\WObj:=wobj0).trans.x) < 0.5",
+    "p = [1,2,3]",
+    "bDone = FALSE",
+    "a div 2 >= b",
+]
+
+
+@pytest.mark.parametrize("condition", CONDITIONS)
+def test_heads_are_single_fast_tokens_with_the_plain_tree(condition):
+    text = module(
+        "FUNC num f(num x)",
+        f"  IF {condition} THEN",
+        "    RETURN x * 2;",
+        f"  ELSEIF {condition} THEN",
+        "    RETURN;",
+        "  ELSE",
+        f"    RETURN {condition};",
+        "  ENDIF",
+        f"  WHILE {condition} DO",
+        "    x := x + 1;",
+        "  ENDWHILE",
+        "ENDFUNC",
+    )
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert fast_tokens(text) == ["FAST_IF", "FAST_RETURN", "FAST_ELSEIF", "FAST_RETURN",
+                                 "FAST_RETURN", "FAST_WHILE", "FAST_CALLS"]
+
+
+@pytest.mark.parametrize("text", [
+    routine("IF(a)THEN", "ENDIF"),
+    routine("if a then", "elseif b then", "endif"),
+    routine("IF bTHEN THEN", "ENDIF"),  # THEN as the end of a name is not the keyword
+    routine("WHILE a < bDO DO", "ENDWHILE"),
+    routine("IF a", "  AND b", "THEN", "ENDIF"),
+])
+def test_heads_written_tightly_or_over_lines(text):
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert fast_tokens(text)[0] in ("FAST_IF", "FAST_WHILE")
+
+
+@pytest.mark.parametrize("text", [
+    # left to the plain grammar's tokens: a comment, a conditional or named argument, a
+    # placeholder in the condition
+    routine("IF a ! why", "THEN", "ENDIF"),
+    routine("IF f(\\A?B) THEN", "ENDIF"),
+    routine("IF f(x:=1) THEN", "ENDIF"),
+    routine("IF <EXP> THEN", "ENDIF"),
+])
+def test_conditions_the_reader_does_not_take_keep_the_plain_tokens(text):
+    assert "FAST_IF" not in fast_tokens(text)
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("text", [
+    routine("IF a > b > c THEN", "ENDIF"),  # relations do not chain
+    routine("IF a = NOT b THEN", "ENDIF"),  # NOT only where a condition may start
+    routine("IF THEN", "ENDIF"),
+    routine("WHILE a AND DO", "ENDWHILE"),
+    routine("IF a b THEN", "ENDIF"),
+    module("FUNC num f()", "  RETURN 1, 2;", "ENDFUNC"),
+])
+def test_invalid_heads_are_refused_as_the_grammar_refuses_them(text):
+    assert_parses_as_plain(text)
+
+
+@pytest.mark.parametrize("text,expected", [
+    ("a AND b OR c", ("OR", ("AND", "a", "b"), "c")),
+    ("a OR b AND c", ("OR", "a", ("AND", "b", "c"))),
+    ("NOT a = b AND c", ("AND", ("NOT", ("=", "a", "b")), "c")),
+    ("a XOR b OR c", ("OR", ("XOR", "a", "b"), "c")),
+    ("-a + b < c * d", ("<", ("+", ("-", "a"), "b"), ("*", "c", "d"))),
+])
+def test_condition_precedence(text, expected):
+    """Independent of the grammar: the precedence RAPID documents (OR XOR < AND < NOT <
+    relations < + - < * / DIV MOD < unary)."""
+    def tree(node: s.Expr) -> object:
+        if isinstance(node, s.Binary):
+            return (node.op, tree(node.left), tree(node.right))
+        if isinstance(node, s.Unary):
+            return (node.op, tree(node.operand))
+        return node.name
+
+    assert tree(read_expression(text, 0, condition=True)) == expected
+
+
+@pytest.mark.parametrize("text", ["a < b < c", "a = NOT b", "", "a AND", "NOT", "a b"])
+def test_the_condition_reader_gives_up_on_what_is_not_one_condition(text):
+    with pytest.raises(NotRead):
+        read_expression(text, 0, condition=True)
+
+
+RELATIONS = ["=", "<>", "<", "<=", ">", ">=", " = ", "<=\n"]
+LOGIC = [" AND ", " OR ", " XOR ", " and ", " Or "]
+
+
+@st.composite
+def condition(draw: st.DrawFn, depth: int = 0) -> str:
+    """Text of a condition: sums related and joined, NOT here and there; sometimes not
+    valid RAPID (a chained relation, NOT after a relation), for both routes to refuse."""
+    kind = draw(st.sampled_from(["sum", "relation", "relation"]
+                                + (["logic", "logic", "not", "paren"] if depth < 3 else [])))
+    if kind == "sum":
+        return draw(expression(2))
+    if kind == "relation":
+        rel = draw(st.sampled_from(RELATIONS))
+        extra = draw(st.sampled_from(["", "", "", f" < {draw(expression(2))}"]))
+        return f"{draw(expression(2))}{rel}{draw(expression(2))}{extra}"
+    if kind == "logic":
+        left, right = draw(condition(depth + 1)), draw(condition(depth + 1))
+        return f"{left}{draw(st.sampled_from(LOGIC))}{right}"
+    if kind == "not":
+        return f"NOT {draw(condition(depth + 1))}"
+    return f"({draw(condition(depth + 1))})"
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN"]))
+def test_random_conditions_parse_as_with_the_plain_grammar(cond, where):
+    if where == "IF":
+        body = [f"IF {cond} THEN", "  Stop;", "ENDIF"]
+    elif where == "ELSEIF":
+        body = ["IF a THEN", f"ELSEIF {cond} THEN", "  Stop;", "ENDIF"]
+    elif where == "WHILE":
+        body = [f"WHILE {cond} DO", "  Stop;", "ENDWHILE"]
+    else:
+        body = [f"RETURN {cond};"]
+    text = module("FUNC num f()", *("  " + line for line in body), "ENDFUNC")
+    assert_parses_as_plain(text)
+
+
+def test_moves_inside_fast_heads_build_the_plain_model():
+    lines = [f"  PERS tooldata tMill:={TOOL};", f"  PERS wobjdata wPlate:={WOBJ};",
+             "  VAR num n:=0;", "  VAR bool bOk:=TRUE;"]
+    lines += [f"  CONST robtarget p{i}:={TARGET};" for i in range(3)]
+    body = ["IF n > 1 AND bOk THEN", "  MoveL p0,v100,z1,tMill\\WObj:=wPlate;",
+            "ELSEIF NOT bOk THEN", "  MoveL Offs(p1,0,0,n),v100,z1,tMill\\WObj:=wPlate;",
+            "ENDIF", "WHILE n < 3 DO", "  n := n + 1;",
+            "  MoveJ p2,v100,fine,tMill\\WObj:=wPlate;", "ENDWHILE"]
+    text = "\n".join(["MODULE M", *lines, "  PROC main()", *("    " + b for b in body),
+                      "  ENDPROC", "ENDMODULE", ""])
+    program = assert_same_model(text)
+    assert [m.in_loop for m in program.motions] == [False, False, True]
