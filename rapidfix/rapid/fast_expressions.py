@@ -49,16 +49,18 @@ STRING = r'"(?:[^"\r\n]|"")*"'
 
 
 def _nested(open_: str, close: str) -> str:
-    """A bracketed group up to three levels deep (its inside not checked)."""
+    """A bracketed group up to three levels deep (its inside not checked; a bracket in
+    a string does not count)."""
     o, c = re.escape(open_), re.escape(close)
-    other = f"[^{o}{c}]*"
+    # (written as "plain characters, then strings each followed by plain characters":
+    # one way only to match, so a failure is not retried in other splits)
+    other = f'[^{o}{c}"]*(?:{STRING}[^{o}{c}"]*)*'
     return rf"{o}{other}(?:{o}{other}(?:{o}{other}{c}{other})*{c}{other})*{c}"
 
 
 # A value in text the lexer has checked: strings, pieces without whitespace or
-# separators, and bracketed groups (which hold no string: the patterns below take
-# strings only outside parentheses and brackets), with whitespace between them (but not
-# after the last).
+# separators, and bracketed groups, with whitespace between them (but not after the
+# last).
 _CHUNK = (rf"(?:{STRING}|[^\",;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}"
           rf"|{_nested('[', ']')}|{_nested('{', '}')})")
 VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
@@ -88,12 +90,15 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
         raise ValueError("rapid.lark's numbers, strings or whitespace changed; "
                          "update fast_expressions")
     loose, deep = aggregates
-    signs = r"(?:[-+][-+ \t\f\v\r\n\x1a]*)?"
+    # signs, and NOT (the reader refuses it where the grammar does not take it)
+    signs = rf"(?:(?:[-+]|(?i:NOT){word_end}){WS}*)*"
     # Each list below is written once: an element, then its separator or a look at what
     # ends the list. Look-aheads on the next character spare the regular expression
     # engine the alternatives that cannot match (most values are single names).
     # After an operand: an operator and the start of a further operand, or the end.
-    follow = (rf"{WS}*(?:(?:[-+*\x2f]|(?i:DIV|MOD){word_end}){WS}*(?=[-+.0-9A-Za-z(\"])"
+    # (arithmetic, relations and logic: the reader checks the grammar's structure)
+    operator = rf"(?:[-+*\x2f=]|<[>=]?|>=?|(?i:DIV|MOD|AND|OR|XOR){word_end})"
+    follow = (rf"{WS}*(?:{operator}{WS}*(?=[-+.0-9A-Za-z(\"])"
               rf"|(?=[,;)}}\]\\]))")
     number = f"(?=[0-9.])(?:{NUMBER})"
 
@@ -109,14 +114,15 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
 
     # an operand inside a function call or an index: its indices numbers or names
     leaf = f"(?:{number}|{value_name})"
-    operand = rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}{postfix(leaf)})"
+    truth = rf"(?i:TRUE|FALSE){word_end}"
+    operand = (rf"{signs}(?:{number}|(?=[A-Za-z])(?:{value_name}{postfix(leaf)}|{truth})"
+               rf"|{STRING})")
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
     # most are
     quick = (rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z])(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
              rf"(?={WS}*[,;)\\])")
-    # a string as a whole value (a string in a function call's argument, an aggregate or
-    # parentheses is left to the grammar; one in a sum is an operand of `term`)
+    # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
 
     def argument(value: str) -> str:
@@ -138,8 +144,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     nested = rf"(?=[A-Za-z]){value_name}{WS}*{call_list(f'(?:{loose}|{either})')}"
     inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})")
     paren = rf"\({WS}*{simple}{WS}*\)"
-    term = (rf"{signs}(?:{number}|(?=[A-Za-z]){value_name}(?:{WS}*{inner})?{postfix(simple)}"
-            rf"|{paren}|{STRING})")
+    term = (rf"{signs}(?:{number}|(?=[A-Za-z])(?:{value_name}(?:{WS}*{inner})?{postfix(simple)}"
+            rf"|{truth})|{paren}|{STRING})")
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"

@@ -109,7 +109,7 @@ _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # (an expression too: fast_expressions)
 _SIMPLE_TEXT = _EXPRESSION_TEXT
 # A function call of such values (`Offs(p1,0,0,-10)`).
-_CALL_TEXT = rf"[A-Za-z][A-Za-z0-9_]*{WS}*\([^()]*\)"
+_CALL_TEXT = rf'[A-Za-z][A-Za-z0-9_]*{WS}*\([^()"]*(?:{STRING}[^()"]*)*\)'
 # A value: a function call whose arguments are such values or such calls
 # (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`),
 # arithmetic of them, or one of them.
@@ -366,7 +366,7 @@ def _value_node(text: str, start: int) -> s.Expr:
         return s.String(start, start + len(text), string_value(text))
     if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
         try:
-            return read_expression(text, start)
+            return read_expression(text, start, condition=True)
         except NotRead:
             raise NotFast(text) from None
     end = start + len(text)
@@ -378,7 +378,7 @@ def _value_node(text: str, start: int) -> s.Expr:
             return s.NumericAggregate(start, end, aggregate_value(text))
         except NotFast:  # the loose pattern let arithmetic through: [1-1,2]
             try:
-                return read_expression(text, start)
+                return read_expression(text, start, condition=True)
             except NotRead:
                 raise NotFast(text) from None
     if first.isdigit() or first == ".":

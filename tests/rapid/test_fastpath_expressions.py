@@ -65,6 +65,11 @@ READ_FAST = [
     'TPWrite "say ""hi"" \\41 (x) [y] {z} !c";',
     'TPWrite "Count: " + NumToStr(nCount,0) + "; mm", "a,b" \\Num:=n;',
     'Foo "a;b";',
+    # conditions as arguments, strings and TRUE/FALSE inside calls and parentheses
+    'WaitUntil stReact{1}="Ready" AND NOT bStop OR n<>2 \\MaxTime:=5;',
+    'WaitUntil(nCmdInput=0);',
+    'TPWrite("Drilling hole 1 of 11!");',
+    'Foo f("a)b", "c") + ")", CJointT(\\TaskName:="T_ROB1"), g(TRUE, a >= 1 XOR b);',
 ]
 
 ASSIGNMENTS = [
@@ -77,6 +82,8 @@ ASSIGNMENTS = [
     "p := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     's := "abc";',
     's:="x;y" + s + "z,w";',
+    'bOk := a = 1 AND NOT b OR c <> "x(y)";',
+    'pTemp:=CRobT(\\taskname:="T_ROB2"\\tool:=tWeld2\\WObj:=wobjWeldLine2);',
     "bDone := TRUE;",
     "b{2} := false;",
 ]

@@ -38,6 +38,8 @@ NEAR_MISSES = {
     # the heads' conditions: taken as few characters as can be, up to THEN, DO or ';'
     "condition without THEN": "IF " + " AND ".join(['f(1) = "a"'] * N) + " ;",
     "condition without DO": "WHILE " + " OR ".join(["a{1}.b < -1"] * N) + " x;",
+    "strings in calls": "Foo " + ",".join(['f("a)", TRUE)'] * N) + " x;",
+    "relations in arguments": "Foo " + ",".join(['a = "b" AND NOT c'] * N) + " x;",
     "RETURN without its end": "RETURN " + " + ".join(["\\A:=1"] * N) + " x",
 }
 
