@@ -13,6 +13,10 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 - loops:       FOR loops around moves to `Offs` of the loop variable
 - failing:     a third of the targets out of reach, a third on a branch nothing is on
 - records:     offsets written with record components of tools and targets
+- messages:    strings holding commas, semicolons and brackets, strings in sums and in
+               parentheses, between the moves
+- conditions:  IF / ELSEIF / WHILE heads with relations and logic, WaitUntil with
+               conditions, a FUNC that RETURNs
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -24,7 +28,7 @@ import functools
 from program_shapes import _head, _robtarget, _targets
 
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
-              "assign", "io", "loops", "failing", "records")
+              "assign", "io", "loops", "failing", "records", "messages", "conditions")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -207,10 +211,42 @@ def _records(n: int) -> list[str]:
     return [*_head("Records"), *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _messages(n: int) -> list[str]:
+    moves = []
+    for k in range(n):
+        moves.append(f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;")
+        moves.append((f'    TPWrite "Point {k}, reached; next [p{k + 1}] (ok)";',
+                      '    TPWrite "Count: " + NumToStr(nCount, 0) + "; of " + sTotal;',
+                      f'    TPWrite("Drilling hole {k} of {n}!");',
+                      '    sLast := "say ""done""" + sLast;')[k % 4])
+    return [*_head("Messages"), "  VAR num nCount:=0;", '  VAR string sLast:="";',
+            '  CONST string sTotal:="all, of them";', *_decls(n), *_parts(moves, 1000),
+            "ENDMODULE"]
+
+
+def _conditions(n: int) -> list[str]:
+    blocks = []  # one string per block: a block stays in one routine
+    for k in range(n):
+        move = f"MoveL Offs(p{k},0,0,nLift),v100,z1,tMill\\WObj:=wPlate;"
+        lines = ((f"    IF nCount > {k % 5} AND NOT bStop OR sMode = \"fast\" THEN",
+                  f"      {move}", "    ELSEIF (nCount MOD 2 = 0) XOR bStop THEN",
+                  f"      MoveJ p{k},v200,z5,tMill\\WObj:=wPlate;", "    ENDIF"),
+                 ("    WHILE nCount < 2 AND DInput(diReady) = 1 DO",
+                  "      nCount := Lift(nCount) + 1;", "    ENDWHILE", f"    {move}"),
+                 ("    WaitUntil nCount >= 0 AND bStop = FALSE \\MaxTime:=5;",
+                  f"    {move}"))[k % 3]
+        blocks.append("\n".join(lines))
+    return [*_head("Conditions"), "  VAR num nCount:=0;", "  VAR bool bStop:=FALSE;",
+            '  VAR string sMode:="fast";', "  CONST num nLift:=0.5;", *_decls(n),
+            "  FUNC num Lift(num level)", "    IF level <= 0 THEN", "      RETURN 0;",
+            "    ENDIF", "    RETURN level * 0.5;", "  ENDFUNC", *_parts(blocks, 300),
+            "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
-             "records": _records}
+             "records": _records, "messages": _messages, "conditions": _conditions}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
