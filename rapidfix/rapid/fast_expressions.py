@@ -154,14 +154,19 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # a separator is refused before the list's end however much space stands between
     # (`Foo 1, ;` is not RAPID)
     arguments = rf"(?:{argument(value)}(?:{WS}*,(?!{WS}*;){WS}*|{WS}*(?=[\\;])))+"
-    # a condition's text (rapid.lark's `expr`), up to the keyword its user puts after
-    # it: strings, optional arguments' `\Name:=`, and any character but those of a
-    # comment, a statement's end, a conditional or named argument (`\A?B`, `f(x:=1)`)
-    # or a placeholder (`<EXP>`), taken as few as can be. The reader checks all of it.
-    condition = (rf"(?:{STRING}|\\{WS}*{plain_name}{WS}*:=|[^;!\"?:<]"
-                 rf"|<(?![A-Za-z]+>))+?")
+    condition = condition_pattern(plain_name)
     return {"value": value, "arguments": arguments, "selectors": postfix(simple),
             "condition": condition}
+
+
+def condition_pattern(name: str) -> str:
+    """The text of a condition (rapid.lark's `expr`, or a comma-separated list of them),
+    up to the keyword its statement puts after it: strings, optional arguments'
+    `\\Name:=` (`name` the pattern of Name), and any character but those of a comment,
+    a statement's end, a conditional or named argument (`\\A?B`, `f(x:=1)`) or a
+    placeholder (`<EXP>`), taken as few as can be. The reader checks all of it."""
+    return (rf"(?:{STRING}|\\{WS}*{name}{WS}*:=|[^;!\"?:<]"
+            rf"|<(?![A-Za-z]+>))+?")
 
 
 # What the reader takes without reading it again: the values fastpath reads itself
@@ -422,6 +427,23 @@ def _depth(node: s.Node) -> int:
     return deepest
 
 
+def read_list(text: str, start: int) -> list[s.Expr]:
+    """The conditions of a comma-separated list (a CASE's values) standing at `start`;
+    NotRead as read_expression."""
+    reader = _Reader(text, start)
+    items = []
+    try:
+        items.append(reader.condition())
+        while reader._skip() == ",":
+            reader.pos += 1
+            items.append(reader.condition())
+    except RecursionError:
+        raise NotRead(text) from None
+    if reader._skip() or (len(text) > _DEEP_TEXT and max(map(_depth, items)) > DEEPEST):
+        raise NotRead(text)
+    return items
+
+
 def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
     """The node rapid.lark builds for the value `text` standing at offset `start` (a sum,
     or with `condition` any `expr`: relations, NOT, AND, OR, XOR); NotRead when it is
@@ -463,4 +485,5 @@ def moved(node: s.Expr, shift: int, move: Callable[[s.Expr, int], s.Expr]) -> s.
 
 
 __all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "STRING",
-           "VALUE_TEXT", "WS", "NotRead", "expression_patterns", "moved", "read_expression"]
+           "VALUE_TEXT", "WS", "NotRead", "condition_pattern", "expression_patterns", "moved",
+           "read_expression", "read_list"]

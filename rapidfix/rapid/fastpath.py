@@ -67,9 +67,11 @@ from rapidfix.rapid.fast_expressions import (
     PLAIN_VALUE,
     STRING,
     NotRead,
+    condition_pattern,
     expression_patterns,
     moved,
     read_expression,
+    read_list,
 )
 from rapidfix.rapid.fast_expressions import VALUE_TEXT as _EXPRESSION_TEXT
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
@@ -182,20 +184,47 @@ def _patterns() -> dict[str, str]:
     dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
             f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
-    # the heads of IF, ELSEIF and WHILE (their condition up to THEN / DO), and RETURN
-    # with or without a value
-    condition = expression["condition"]
-    # (the keyword after the condition is a whole word: `IF bTHEN THEN`)
-    heads = {kind: rf"(?i:{first}){_WORD_END}{condition}"
-                   rf"(?<![A-Za-z0-9_{_LATIN1_LETTERS}])(?i:{last}){_WORD_END}"
-             for kind, (first, last) in _HEADS.items()}
-    heads["return"] = rf"(?i:RETURN){_WORD_END}(?:{condition})?;"
-    return {"call": call, "decl": decl, **heads}
+    return {"call": call, "decl": decl, **head_patterns(expression["condition"], False)}
 
 
-# The statements whose head is one fast token: the keywords before and after the
-# condition (its text is read by fast_expressions.read_expression).
-_HEADS = {"if": ("IF", "THEN"), "elseif": ("ELSEIF", "THEN"), "while": ("WHILE", "DO")}
+def head_patterns(condition: str, groups: bool) -> dict[str, str]:
+    """The patterns of the statements' heads that are one fast token each, by kind: the
+    keywords, and between them the conditions (`condition`), a CASE's list of them or a
+    FOR's variable; with `groups`, each of those in a group of its own (for splitting a
+    token, whose syntax the lexer has checked)."""
+    c = f"({condition})" if groups else condition
+    name = f"([A-Za-z][A-Za-z0-9_]*){_WORD_END}" if groups else f"[A-Za-z][A-Za-z0-9_]*{_WORD_END}"
+
+    def keyword(words: str) -> str:
+        """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
+        return rf"(?<![A-Za-z0-9_{_LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
+
+    return {
+        "if": rf"(?i:IF){_WORD_END}{c}{keyword('THEN')}",
+        "elseif": rf"(?i:ELSEIF){_WORD_END}{c}{keyword('THEN')}",
+        "while": rf"(?i:WHILE){_WORD_END}{c}{keyword('DO')}",
+        "for": (rf"(?i:FOR){_WORD_END}{WS}*{name}{WS}*(?i:FROM){_WORD_END}{c}{keyword('TO')}"
+                rf"{c}(?:{keyword('STEP')}{c})?{keyword('DO')}"),
+        # (up to its first clause, which stays a token of its own: a token split is
+        # that far already)
+        "test": rf"(?i:TEST){_WORD_END}{c}"
+                + ("" if groups else f"(?={keyword('CASE|DEFAULT|ENDTEST')})"),
+        "case": rf"(?i:CASE){_WORD_END}{c}:",
+        "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
+    }
+
+
+# The statements whose head is one fast token, and the rule each is an alternative of
+# (rule: its head token, then what follows the plain head in rapid.lark).
+_HEAD_RULES = {
+    "if": ("fast_if_stmt", "_statement* elseif_clause* else_clause? ENDIF"),
+    "elseif": ("elseif_clause", "_statement* -> fast_elseif_clause"),
+    "while": ("fast_while_stmt", "_statement* ENDWHILE"),
+    "for": ("fast_for_stmt", "_statement* ENDFOR"),
+    "test": ("fast_test_stmt", "(case_clause | case_placeholder)* default_clause? ENDTEST"),
+    "case": ("case_clause", "_statement* -> fast_case_clause"),
+    "return": ("return_stmt", "-> fast_return_stmt"),
+}
 _BODY_RULE = "_body: (data_decl | _statement)*"
 #: statements in one fast token at most. Python's regular expression engine keeps a
 #: backtracking record per repetition, so one token for a whole CAM program's hundred
@@ -216,20 +245,20 @@ def grammar_extension(grammar: str) -> str:
     # a run starts with a statement (the gap before the first matches nothing)
     calls = f"(?=[A-Za-z])(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
     decls = f"(?=[A-Za-z])(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
-    heads = {kind: p[kind] for kind in (*_HEADS, "return")}
+    heads = {kind: p[kind] for kind in _HEAD_RULES}
     if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
         raise ValueError("a terminal pattern holds '/'")  # a Lark regex literal ends at '/'
+    new_rules = [rule for rule, _ in _HEAD_RULES.values() if rule.startswith("fast_")]
     return (
-        "\n%extend _statement: _fast_calls | fast_if_stmt | fast_while_stmt\n"
+        f"\n%extend _statement: _fast_calls | {' | '.join(new_rules)}\n"
         "%extend _module_item: _fast_decls\n"
         "%override _body: (data_decl | _fast_decls | _statement)*\n"
-        "%extend elseif_clause: FAST_ELSEIF _statement* -> fast_elseif_clause\n"
-        "%extend return_stmt: FAST_RETURN -> fast_return_stmt\n"
         "_fast_calls: FAST_CALLS\n"
         "_fast_decls: FAST_DECLS\n"
-        "fast_if_stmt: FAST_IF _statement* elseif_clause* else_clause? ENDIF\n"
-        "fast_while_stmt: FAST_WHILE _statement* ENDWHILE\n"
-        f"FAST_CALLS.9: /{calls}/\n"
+        + "".join(f"{'' if rule.startswith('fast_') else '%extend '}{rule}: "
+                  f"FAST_{kind.upper()} {rest}\n"
+                  for kind, (rule, rest) in _HEAD_RULES.items())
+        + f"FAST_CALLS.9: /{calls}/\n"
         f"FAST_DECLS.9: /{decls}/\n"
         + "".join(f"FAST_{kind.upper()}.9: /{pattern}/\n" for kind, pattern in heads.items())
     )
@@ -756,35 +785,68 @@ class FastSyntaxBuilder(SyntaxBuilder):
         tok = children[0]
         return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
 
-    # The heads: the plain rules' nodes, their condition read from the token's text.
+    # The heads: the plain rules' nodes, their conditions read from the token's text.
     def fast_if_stmt(self, head: Token, *rest: Any) -> s.If:
-        return self.if_branches(head.start_pos, _condition(head, "IF", "THEN"), rest)
+        (cond,) = _head_parts(head, "if")
+        return self.if_branches(head.start_pos, cond, rest)
 
     def fast_elseif_clause(self, head: Token, *body: Any) -> tuple:
-        return ("elseif", _condition(head, "ELSEIF", "THEN"), statements_in(body))
+        (cond,) = _head_parts(head, "elseif")
+        return ("elseif", cond, statements_in(body))
 
     def fast_while_stmt(self, head: Token, *rest: Any) -> s.While:
-        return s.While(head.start_pos, rest[-1].end_pos, _condition(head, "WHILE", "DO"),
-                       statements_in(rest))
+        (cond,) = _head_parts(head, "while")
+        return s.While(head.start_pos, rest[-1].end_pos, cond, statements_in(rest))
+
+    def fast_for_stmt(self, head: Token, *rest: Any) -> s.For:
+        var, first, last, step = _head_parts(head, "for")
+        return s.For(head.start_pos, rest[-1].end_pos, var, first, last, step,
+                     statements_in(rest))
+
+    def fast_test_stmt(self, head: Token, *rest: Any) -> s.Test:
+        (subject,) = _head_parts(head, "test")
+        cases = [item[1:] for item in rest if isinstance(item, tuple) and item[0] == "case"]
+        default = next((item[1] for item in rest if isinstance(item, tuple)
+                        and item[0] == "default"), None)
+        return s.Test(head.start_pos, rest[-1].end_pos, subject, cases, default)
+
+    def fast_case_clause(self, head: Token, *body: Any) -> tuple:
+        (values,) = _head_parts(head, "case")
+        return ("case", values, statements_in(body))
 
     def fast_return_stmt(self, head: Token) -> s.Return:
-        text = str(head)
-        return s.Return(head.start_pos, head.end_pos,
-                        None if not text[6:-1].strip(_WS_CHARS) else
-                        _condition(head, "RETURN", ";"))
+        (value,) = _head_parts(head, "return")
+        return s.Return(head.start_pos, head.end_pos, value)
 
 
-def _condition(head: Token, first: str, last: str) -> s.Expr:
-    """The condition (or RETURN's value) in the text of a fast head token, between its
-    keywords `first` and `last`."""
-    text = str(head)
-    inner = text[len(first):len(text) - len(last)]
-    value = inner.strip(_WS_CHARS)
-    start = head.start_pos + len(first) + len(inner) - len(inner.lstrip(_WS_CHARS))
-    try:
-        return read_expression(value, start, condition=True)
-    except NotRead:
-        raise NotFast(value) from None
+@functools.lru_cache(maxsize=1)
+def _head_splitters() -> dict[str, re.Pattern[str]]:
+    """head_patterns with groups, compiled (the lexer has checked the tokens they split,
+    so a name needs no keyword refused)."""
+    condition = condition_pattern("[A-Za-z][A-Za-z0-9_]*")
+    return {kind: re.compile(pattern)
+            for kind, pattern in head_patterns(condition, True).items()}
+
+
+def _head_parts(head: Token, kind: str) -> list[Any]:
+    """What the groups of a head token of `kind` hold, read: a condition (None where an
+    optional one is absent), a CASE's list of them, a FOR's variable name."""
+    m = _head_splitters()[kind].fullmatch(str(head))
+    parts: list[Any] = []
+    for index, text in enumerate(m.groups(), 1):
+        if text is None or (kind == "return" and not text.strip(_WS_CHARS)):  # `RETURN ;`
+            parts.append(None)
+        elif kind == "for" and index == 1:
+            parts.append(text)
+        else:
+            value = text.strip(_WS_CHARS)
+            start = head.start_pos + m.start(index) + len(text) - len(text.lstrip(_WS_CHARS))
+            try:
+                parts.append(read_list(value, start) if kind == "case" else
+                             read_expression(value, start, condition=True))
+            except NotRead:
+                raise NotFast(value) from None
+    return parts
 
 
 def cached_extension(grammar: str) -> str:

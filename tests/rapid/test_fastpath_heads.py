@@ -1,7 +1,7 @@
-"""The heads of IF, ELSEIF and WHILE and the RETURN statement as single fast tokens
-(rapidfix.rapid.fastpath FAST_IF, FAST_ELSEIF, FAST_WHILE, FAST_RETURN): their conditions
-are read by fast_expressions' reader, and the tree must be the plain grammar's, node for
-node, or both routes must refuse the text.
+"""The heads of IF, ELSEIF, WHILE, FOR, TEST and CASE and the RETURN statement as single
+fast tokens (rapidfix.rapid.fastpath FAST_IF, FAST_ELSEIF, FAST_WHILE, FAST_FOR, FAST_TEST,
+FAST_CASE, FAST_RETURN): their conditions are read by fast_expressions' reader, and the
+tree must be the plain grammar's, node for node, or both routes must refuse the text.
 """
 
 from __future__ import annotations
@@ -63,11 +63,20 @@ def test_heads_are_single_fast_tokens_with_the_plain_tree(condition):
         f"  WHILE {condition} DO",
         "    x := x + 1;",
         "  ENDWHILE",
+        f"  FOR i FROM {condition} TO {condition} STEP {condition} DO",
+        "  ENDFOR",
+        f"  TEST {condition}",
+        f"  CASE {condition}, {condition}:",
+        "    x := 1;",
+        f"  CASE {condition}:",
+        "  DEFAULT:",
+        "  ENDTEST",
         "ENDFUNC",
     )
     assert shape(fast_parser().parse(text)) == plain_tree(text)
     assert fast_tokens(text) == ["FAST_IF", "FAST_RETURN", "FAST_ELSEIF", "FAST_RETURN",
-                                 "FAST_RETURN", "FAST_WHILE", "FAST_CALLS"]
+                                 "FAST_RETURN", "FAST_WHILE", "FAST_CALLS", "FAST_FOR",
+                                 "FAST_TEST", "FAST_CASE", "FAST_CALLS", "FAST_CASE"]
 
 
 @pytest.mark.parametrize("text", [
@@ -76,10 +85,18 @@ def test_heads_are_single_fast_tokens_with_the_plain_tree(condition):
     routine("IF bTHEN THEN", "ENDIF"),  # THEN as the end of a name is not the keyword
     routine("WHILE a < bDO DO", "ENDWHILE"),
     routine("IF a", "  AND b", "THEN", "ENDIF"),
+    routine("FOR i FROM 1 TO nSTEPs DO", "ENDFOR"),
+    routine("for i from 1 to 10 step -1 do", "endfor"),
+    routine("FOR i FROM TOP TO \"TO\" DO", "ENDFOR"),
+    routine("TEST a", "DEFAULT:", "ENDTEST"),
+    routine("TEST a ENDTEST"),
+    routine('TEST s CASE "a:b", "c":', "ENDTEST"),
+    module("FUNC num f()", "  RETURN ;", "  RETURN\t\n;", "ENDFUNC"),
 ])
 def test_heads_written_tightly_or_over_lines(text):
     assert shape(fast_parser().parse(text)) == plain_tree(text)
-    assert fast_tokens(text)[0] in ("FAST_IF", "FAST_WHILE")
+    assert fast_tokens(text)[0] in ("FAST_IF", "FAST_WHILE", "FAST_FOR", "FAST_TEST",
+                                    "FAST_RETURN")
 
 
 @pytest.mark.parametrize("text", [
@@ -89,6 +106,8 @@ def test_heads_written_tightly_or_over_lines(text):
     routine("IF f(\\A?B) THEN", "ENDIF"),
     routine("IF f(x:=1) THEN", "ENDIF"),
     routine("IF <EXP> THEN", "ENDIF"),
+    routine("FOR i FROM <EXP> TO 2 DO", "ENDFOR"),
+    routine("TEST a", "CASE f(\\A?B):", "ENDTEST"),
 ])
 def test_conditions_the_reader_does_not_take_keep_the_plain_tokens(text):
     assert "FAST_IF" not in fast_tokens(text)
@@ -102,6 +121,11 @@ def test_conditions_the_reader_does_not_take_keep_the_plain_tokens(text):
     routine("WHILE a AND DO", "ENDWHILE"),
     routine("IF a b THEN", "ENDIF"),
     module("FUNC num f()", "  RETURN 1, 2;", "ENDFUNC"),
+    routine("FOR i FROM 1 TO DO", "ENDFOR"),
+    routine("FOR i FROM 1 STEP 2 TO 3 DO", "ENDFOR"),
+    routine("TEST a", "CASE 1,:", "ENDTEST"),
+    routine("TEST a", "CASE :", "ENDTEST"),
+    routine("TEST", "CASE 1:", "ENDTEST"),
 ])
 def test_invalid_heads_are_refused_as_the_grammar_refuses_them(text):
     assert_parses_as_plain(text)
@@ -157,10 +181,16 @@ def condition(draw: st.DrawFn, depth: int = 0) -> str:
     return f"({draw(condition(depth + 1))})"
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN"]))
+@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN", "FOR", "TEST", "CASE"]))
 def test_random_conditions_parse_as_with_the_plain_grammar(cond, where):
-    if where == "IF":
+    if where == "FOR":
+        body = [f"FOR i FROM {cond} TO 3 STEP {cond} DO", "  Stop;", "ENDFOR"]
+    elif where == "TEST":
+        body = [f"TEST {cond}", "CASE 1:", "  Stop;", "ENDTEST"]
+    elif where == "CASE":
+        body = ["TEST a", f"CASE {cond}, {cond}:", "  Stop;", "DEFAULT:", "ENDTEST"]
+    elif where == "IF":
         body = [f"IF {cond} THEN", "  Stop;", "ENDIF"]
     elif where == "ELSEIF":
         body = ["IF a THEN", f"ELSEIF {cond} THEN", "  Stop;", "ENDIF"]

@@ -40,6 +40,9 @@ NEAR_MISSES = {
     "condition without DO": "WHILE " + " OR ".join(["a{1}.b < -1"] * N) + " x;",
     "strings in calls": "Foo " + ",".join(['f("a)", TRUE)'] * N) + " x;",
     "relations in arguments": "Foo " + ",".join(['a = "b" AND NOT c'] * N) + " x;",
+    "FOR without TO": "FOR i FROM " + " + ".join(['f("TO")'] * N) + " DO",
+    "TEST without a clause": "TEST " + " + ".join(["a{1}"] * N) + " x;",
+    "CASE without its colon": "TEST a CASE " + ", ".join(["1"] * N) + " x;",
     "RETURN without its end": "RETURN " + " + ".join(["\\A:=1"] * N) + " x",
 }
 
