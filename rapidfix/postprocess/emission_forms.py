@@ -8,7 +8,7 @@ Each form is written out for speed and has a general counterpart it must equal
   `rapidfix.rapid.format.format_jointtarget` gives for each;
 - robtarget literals, as `format_robtarget` writes them, their positions and
   orientations likewise built in numpy (`number_rows`);
-- the jointtarget declaration, `format_declaration("CONST", "jointtarget", ...)`;
+- the jointtarget and robtarget declarations, `format_declaration("CONST", ...)`;
 - a MoveL/MoveJ/MoveC statement turned into MoveAbsJ (`joint_statement`), the
   statement `statement_variant` makes from the general edits (`joint_edits`).
 """
@@ -188,6 +188,11 @@ def robtarget_literals(tcp: np.ndarray, conf: np.ndarray, extax: np.ndarray) -> 
 def jointtarget_declaration(name: str, literal: str) -> str:
     """`format_declaration("CONST", "jointtarget", name, literal)`, written out."""
     return f"CONST jointtarget {name}:={literal};"
+
+
+def robtarget_declaration(name: str, literal: str) -> str:
+    """`format_declaration("CONST", "robtarget", name, literal)`, written out."""
+    return f"CONST robtarget {name}:={literal};"
 
 
 def statement_variant(program: Program, motion: MotionInstruction, edits: list[tuple]) -> str:

@@ -64,6 +64,22 @@ def test_the_written_out_declaration_is_what_format_declaration_writes(name, row
     assert program.declarations[0].name == name
 
 
+@settings(max_examples=50, deadline=None)
+@given(st.from_regex(r"ft_[A-Za-z0-9_]{0,29}", fullmatch=True),
+       st.tuples(st.floats(-3000, 3000), st.floats(-3000, 3000), st.floats(-3000, 3000)))
+def test_the_written_out_robtarget_declaration_is_what_format_declaration_writes(name, xyz):
+    from rapidfix.postprocess.emission_forms import robtarget_declaration
+    from rapidfix.rapid import parse_program
+    from rapidfix.rapid.format import format_declaration, format_robtarget
+
+    literal = format_robtarget(xyz, (1, 0, 0, 0), (0, -1, 0, 1), [9e9] * 6)
+    text = robtarget_declaration(name, literal)
+    assert text == format_declaration("CONST", "robtarget", name, literal)
+    program = parse_program(f"MODULE M\n  {text}\nENDMODULE\n")
+    assert program.declarations[0].name == name
+    assert program.declarations[0].type_key == "robtarget"
+
+
 def test_jointtarget_literals_of_a_large_block_round_as_python_formats_each_number():
     """The digits built in numpy for a whole block: halves exactly between two millionths
     (k/128), numbers a rounding error away from a half, every magnitude below 1e8,
