@@ -46,6 +46,7 @@ _PATTERN_NAMES = 1000
 #: longer names stand in that pattern as plain alternatives (bounded nesting)
 _TRIE_DEPTH = 64
 _NAME_SHAPE = re.compile(r"[a-z][a-z0-9_]*")
+_NAME_LINES = re.compile(r"[a-z][a-z0-9_]*(?:\n[a-z][a-z0-9_]*)*")  # names joined by newlines
 _NOT_LETTERS = frozenset("0123456789_")  # word characters other than letters
 _LETTERS = frozenset("abcdefghijklmnopqrstuvwxyz")
 
@@ -124,13 +125,17 @@ def count_identifiers(text: str, names: Iterable[str]) -> dict[str, int]:
     counts 0.
     """
     wanted = set(names)
-    words = {name for name in wanted if _NAME_SHAPE.fullmatch(name)}
+    joined = "\n".join(wanted)
+    if joined.count("\n") == len(wanted) - 1 and _NAME_LINES.fullmatch(joined):
+        words = wanted  # all identifier-shaped (the usual case): checked at once
+    else:
+        words = {name for name in wanted if _NAME_SHAPE.fullmatch(name)}
     if not words:
         return dict.fromkeys(wanted, 0)
     lowered = _ascii_lowered(text)
     counts = (_pattern_counts(lowered, words) if len(words) <= _PATTERN_NAMES
               else _first_letter_counts(lowered, words))
-    return {name: counts.get(name, 0) for name in wanted}
+    return counts if words is wanted else {name: counts.get(name, 0) for name in wanted}
 
 
 class NameAllocator:

@@ -116,7 +116,7 @@ def test_a_thousand_long_names_cut_alike_are_distinct_and_numbered_in_order():
 # not ASCII (one lower-cases to two characters, one to an ASCII letter)
 _WORDY = st.text(alphabet="abpAP_19 ,;\n!xéKİ", max_size=80)
 _NAMES = st.lists(st.one_of(st.sampled_from(["a", "ab", "p1", "b_1", "x", "ba", "P1", "", "1a",
-                                             "é", "k", "i"]),
+                                             "é", "k", "i", "a\nb", "ab\n"]),
                             st.from_regex(r"[abp][abp19_]{0,3}", fullmatch=True),
                             st.text(alphabet="abpAP19_é", max_size=4)), max_size=12)
 

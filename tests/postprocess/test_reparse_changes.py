@@ -161,9 +161,9 @@ def _filtered_cases() -> str:
     """A program whose filtered robtargets take every way: declarations that take the
     filtered robtarget (used by one move, or by two with the same literal), names used
     elsewhere too or by two moves with different literals (a new robtarget after the
-    declaration, LOCAL after a LOCAL one, one whose name is taken), Offs and RelTool of a name (one declaration for the same
-    literal, a numbered one for another), inline targets, a MoveC with one target
-    inline or both new, a routine's own declaration."""
+    declaration, LOCAL after a LOCAL one, one whose name is taken), Offs and RelTool of
+    a name (one declaration for the same literal, a numbered one for another), inline
+    targets, a MoveC with one target inline or both new, a routine's own declaration."""
     lines = cam_program(8).splitlines()
     decls = [line for line in lines if "CONST robtarget" in line]
     literal = decls[6].split(":=", 1)[1].rstrip(";")
