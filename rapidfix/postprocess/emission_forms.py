@@ -139,6 +139,16 @@ def _distinct_texts(rows: np.ndarray, text: Callable[[list], str]) -> list[str]:
         return []
     if (rows == rows[0]).all():
         distinct, inverse = rows[:1], np.zeros(len(rows), int)
+    elif rows.dtype.kind in "iu" and rows.ndim == 2 and np.prod(
+            rows.max(axis=0).astype(float) - rows.min(axis=0).astype(float) + 1) < 2.0 ** 62:
+        # integer rows (confdata): one integer per row, the rows' digits in mixed radix,
+        # found distinct in one dimension (a sort of rows as rows is several times slower)
+        low = rows.min(axis=0)
+        radix = (rows.max(axis=0) - low + 1).astype(np.int64)
+        weights = np.concatenate([[1], np.cumprod(radix[:-1])]).astype(np.int64)
+        key = ((rows - low).astype(np.int64) * weights).sum(axis=1)
+        _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+        distinct = rows[first]
     else:
         distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
     texts = [text(row) for row in distinct.tolist()]
