@@ -663,39 +663,34 @@ class _Emitter:
                                      {}, "ft_", robtarget_declaration, joint=False)
             for n, name in zip(named, names):
                 new[n] = name
-        # the statements: a site's text with its targets' values replaced (a site of
-        # several targets, a MoveC, by its edits)
+        # the statements: a site's text with its targets' values replaced
         text = self.program.text
-        statements: list[str] = []
-        edited: list[int] = []  # the sites whose statement changes
-        n = 0
-        for k, site in enumerate(sites):
-            syntax = site.motion.syntax
-            size = len(site.rows)
-            if size == 1:
-                value = new[n]
-                if value is None:
-                    statements.append(text[syntax.start:syntax.end])
-                else:
-                    span = operands[n].argument.value
-                    statements.append(text[syntax.start:span.start] + value
-                                      + text[span.end:syntax.end])
-                    edited.append(k)
-            else:
+        motions = [site.motion for site in sites]
+        syntaxes = [motion.syntax for motion in motions]
+        if len(operands) == len(sites):  # a target a site (the usual case)
+            statements = [text[syntax.start:syntax.end] if value is None
+                          else text[syntax.start:span.start] + value + text[span.end:syntax.end]
+                          for syntax, span, value in zip(
+                              syntaxes, [op.argument.value for op in operands], new)]
+            edited = [k for k, value in enumerate(new) if value is not None]
+        else:  # a site of several targets (a MoveC) by its edits
+            statements = []
+            edited = []  # the sites whose statement changes
+            n = 0
+            for k, site in enumerate(sites):
+                size = len(site.rows)
                 edits = [(operands[m].argument.value.start, operands[m].argument.value.end,
                           new[m]) for m in range(n, n + size) if new[m] is not None]
                 statements.append(statement_variant(self.program, site.motion, edits))
                 if edits:
                     edited.append(k)
-            n += size
-        syntaxes = [sites[k].motion.syntax for k in edited]
-        self.editor.replace_many([syntax.start for syntax in syntaxes],
-                                 [syntax.end for syntax in syntaxes],
+                n += size
+        self.editor.replace_many([syntaxes[k].start for k in edited],
+                                 [syntaxes[k].end for k in edited],
                                  [statements[k] for k in edited])
-        idents = self.units.add_statements([site.motion.module for site in sites],
-                                           [site.motion.routine for site in sites], statements)
+        idents = self.units.add_statements([motion.module for motion in motions],
+                                           [motion.routine for motion in motions], statements)
         self._add_checks([idents[k] for k in site_of], rows, slot_of)
-
 
     def _flush_declarations(self) -> None:
         """Insert the queued declarations, in the order their anchors were first used
