@@ -210,7 +210,8 @@ class _Emitter:
         self._flush_declarations()
         return self._expected()
 
-    #: False: every move through `_emit_joint_with_points` (tests compare the two routes)
+    #: False: every move through `_emit_joint_with_points` and `_filtered_moves` (tests
+    #: compare the two routes)
     _columns = True
 
     def _jointtarget_name(self, stem: str, literal: str, site: Site) -> str:

@@ -43,6 +43,9 @@ def identifier_counts(text: str) -> Counter[str]:
 #: names up to this many are found by one pattern built from them (compiling it costs
 #: about 15 µs a name); more are found by their first letters and looked up
 _PATTERN_NAMES = 1000
+#: the names found after digits or underscores by the first letters' route: up to this
+#: many by one pattern of them, more place by place
+_LATE_NAMES = 1000
 #: longer names stand in that pattern as plain alternatives (bounded nesting)
 _TRIE_DEPTH = 64
 _NAME_SHAPE = re.compile(r"[a-z][a-z0-9_]*")
@@ -109,9 +112,23 @@ def _first_letter_counts(lowered: str, names: set[str]) -> dict[str, int]:
     # beginning with a class of letters is searched for quickly)
     words = Counter(re.findall(f"[{letters}](?<![a-z0-9_].)[a-z0-9_]*", lowered))
     counts = {name: words.get(name, 0) for name in names}
-    late = names.intersection(re.findall(f"[{letters}](?<=[0-9_].)[a-z0-9_]*", lowered))
-    if late:
+    after = f"[{letters}](?<=[0-9_].)[a-z0-9_]*"  # after a digit or an underscore
+    late = names.intersection(re.findall(after, lowered))
+    if not late:
+        return counts
+    if len(late) <= _LATE_NAMES:
         counts.update(_pattern_counts(lowered, late))
+        return counts
+    # many (a program already compensated holds `jt_p1` beside `p1`): each place is
+    # looked at, too many names for one pattern of them
+    for match in re.finditer(after, lowered):
+        word = match.group()
+        if word in late:
+            back = match.start() - 1
+            while back >= 0 and lowered[back] in _NOT_LETTERS:
+                back -= 1
+            if back < 0 or lowered[back] not in _LETTERS:
+                counts[word] += 1
     return counts
 
 

@@ -138,12 +138,14 @@ def test_counting_names_agrees_with_counting_every_word(text, names, pieces):
     for asked in (names, [*names, *counts]):
         want = {name: counts.get(name, 0) for name in asked}
         assert count_identifiers(text, asked) == want
-        limit = naming._PATTERN_NAMES
-        try:  # the route for many names (the first letters), on these few
-            naming._PATTERN_NAMES = 0
-            assert count_identifiers(text, asked) == want
+        limits = naming._PATTERN_NAMES, naming._LATE_NAMES
+        try:  # the route for many names (the first letters), on these few, with the
+            # names also found after digits or underscores by a pattern or place by place
+            for late in (1000, 0):
+                naming._PATTERN_NAMES, naming._LATE_NAMES = 0, late
+                assert count_identifiers(text, asked) == want
         finally:
-            naming._PATTERN_NAMES = limit
+            naming._PATTERN_NAMES, naming._LATE_NAMES = limits
 
 
 def test_counting_names_longer_than_the_pattern_tree_is_exact():
