@@ -13,6 +13,7 @@ from __future__ import annotations
 import re
 from collections import Counter
 from collections.abc import Iterable
+from itertools import repeat
 
 MAX_IDENTIFIER = 32
 #: an identifier-shaped word of RAPID text (keywords included)
@@ -111,7 +112,7 @@ def _first_letter_counts(lowered: str, names: set[str]) -> dict[str, int]:
     # the first letter, then a look back at it and the character before (a pattern
     # beginning with a class of letters is searched for quickly)
     words = Counter(re.findall(f"[{letters}](?<![a-z0-9_].)[a-z0-9_]*", lowered))
-    counts = {name: words.get(name, 0) for name in names}
+    counts = dict(zip(names, map(words.get, names, repeat(0))))
     after = f"[{letters}](?<=[0-9_].)[a-z0-9_]*"  # after a digit or an underscore
     late = names.intersection(re.findall(after, lowered))
     if not late:
