@@ -86,6 +86,15 @@ def _trie(names: Iterable[str]) -> str:
     return branch(root)
 
 
+def _starts_word(lowered: str, start: int) -> bool:
+    """True when a word of `IDENTIFIER.findall` starts at `start` (a letter): no letter in
+    the run of word characters before it."""
+    back = start - 1
+    while back >= 0 and lowered[back] in _NOT_LETTERS:
+        back -= 1
+    return back < 0 or lowered[back] not in _LETTERS
+
+
 def _pattern_counts(lowered: str, names: set[str]) -> dict[str, int]:
     """How often each of `names` (lower-case identifier-shaped words) stands as a word of
     `lowered`: one pattern of them all finds each place a name ends a run of word
@@ -95,10 +104,7 @@ def _pattern_counts(lowered: str, names: set[str]) -> dict[str, int]:
     pattern = "|".join(filter(None, [_trie(short), *long]))
     counts = dict.fromkeys(names, 0)
     for match in re.finditer(f"(?:{pattern})(?![a-z0-9_])", lowered):
-        back = match.start() - 1
-        while back >= 0 and lowered[back] in _NOT_LETTERS:
-            back -= 1
-        if back < 0 or lowered[back] not in _LETTERS:
+        if _starts_word(lowered, match.start()):
             counts[match.group()] += 1
     return counts
 
@@ -107,7 +113,8 @@ def _first_letter_counts(lowered: str, names: set[str]) -> dict[str, int]:
     """`_pattern_counts` for many names: every word starting with one of the names' first
     letters after a character that is not a word character (or at the text's start) is
     counted; the names that also follow digits or underscores somewhere (`1_p1` holds
-    `p1`) are then counted by `_pattern_counts`."""
+    `p1`) are then counted in full by `_pattern_counts` or, when there are many, their
+    places after digits or underscores added one by one."""
     letters = "".join(sorted({name[0] for name in names}))
     # the first letter, then a look back at it and the character before (a pattern
     # beginning with a class of letters is searched for quickly)
@@ -124,12 +131,8 @@ def _first_letter_counts(lowered: str, names: set[str]) -> dict[str, int]:
     # looked at, too many names for one pattern of them
     for match in re.finditer(after, lowered):
         word = match.group()
-        if word in late:
-            back = match.start() - 1
-            while back >= 0 and lowered[back] in _NOT_LETTERS:
-                back -= 1
-            if back < 0 or lowered[back] not in _LETTERS:
-                counts[word] += 1
+        if word in late and _starts_word(lowered, match.start()):
+            counts[word] += 1
     return counts
 
 
