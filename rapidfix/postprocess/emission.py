@@ -12,7 +12,7 @@ it reads and writes no file.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from itertools import groupby
 from typing import Any
@@ -26,6 +26,7 @@ from rapidfix.postprocess.emission_forms import (
     joint_statement,
     jointtarget_declaration,
     jointtarget_literals,
+    robtarget_declaration,
     robtarget_literals,
     statement_variant,
 )
@@ -209,7 +210,8 @@ class _Emitter:
         self._flush_declarations()
         return self._expected()
 
-    #: False: every move through `_emit_joint_with_points` (tests compare the two routes)
+    #: False: every move through `_emit_joint_with_points` and `_filtered_moves` (tests
+    #: compare the two routes)
     _columns = True
 
     def _jointtarget_name(self, stem: str, literal: str, site: Site) -> str:
@@ -381,24 +383,35 @@ class _Emitter:
                            ) -> list[str]:
         """`_jointtarget_name` for many jointtargets in turn: the names, the new ones
         allocated and declared together."""
+        return self._data_names(stems, literals, motions, operands, self.jt_names, "jt_",
+                                jointtarget_declaration, joint=True)
+
+    def _data_names(self, stems: list[str], literals: list[str],
+                    motions: list[MotionInstruction], operands: list[Operand],
+                    known: dict[tuple[str, str], str], prefix: str,
+                    declaration: Callable[[str, str], str], joint: bool) -> list[str]:
+        """The name of each (stem, literal) in turn, as asked one by one: `known` (stem
+        lower-cased, literal) -> name, extended by the names of the new ones, allocated
+        from `prefix` + stem and declared (`declaration(name, literal)`) together, after
+        the targets' robtargets or among their modules' declarations. `joint`: the
+        declarations are jointtargets' (read back as columns)."""
         keys = list(zip(map(str.lower, stems), literals))
-        known = self.jt_names
         first: dict[tuple[str, str], int] = {}
         deque(map(first.setdefault, keys, range(len(keys))), maxlen=0)  # first use of each
         if len(first) == len(keys) and known.keys().isdisjoint(first):
-            # every target its own new jointtarget (the usual case)
+            # every target its own new data (the usual case)
             order: list[int] | range = range(len(keys))
-            names = self.names.allocate_many(stems, "jt_")
+            names = self.names.allocate_many(stems, prefix)
             name_at = names
             known.update(zip(keys, names))
         else:
             order = [n for key, n in first.items() if key not in known]
-            names = self.names.allocate_many([stems[n] for n in order], "jt_")
+            names = self.names.allocate_many([stems[n] for n in order], prefix)
             known.update(zip([keys[n] for n in order], names))
             name_at = list(map(known.__getitem__, keys))
         self._add_declarations(
             [motions[n] for n in order], [operands[n] for n in order],
-            [f"CONST jointtarget {name}:={literals[n]};" for n, name in zip(order, names)])
+            list(map(declaration, names, [literals[n] for n in order])), joint)
         return name_at
 
     def _points_before(self, site: Site, inter: tuple[int, int] | None, inter_names: list[str],
@@ -455,10 +468,13 @@ class _Emitter:
         return stems  # type: ignore[return-value]
 
     def _add_declarations(self, motions: list[MotionInstruction], operands: list[Operand],
-                          texts: list[str]) -> None:
+                          texts: list[str], joint: bool = True) -> None:
         """`_add_declaration` for many targets: each anchor's block and the check units
         are extended by runs of targets with the same anchor (a CAM program's new
-        declarations all go among one module's)."""
+        declarations all go among one module's). `joint`: jointtarget declarations (the
+        check units keep them apart, to be read back as columns)."""
+        add_units = (self.units.add_jointtarget_declarations if joint
+                     else self.units.add_declarations)
         module_of: dict[str, Any] = {}
         for module in self.program.modules:
             module_of.setdefault(module.name, module)
@@ -467,7 +483,8 @@ class _Emitter:
             # no target declared in the program (inline targets): all among one module's
             module = modules[0] if modules else ""
             if modules:
-                self._extend_block(module.lower(), module_of[module], (module, None), texts)
+                self._queue(module.lower(), module_of[module], texts)
+                add_units(module, None, texts)
             return
         anchors: list[Any] = []
         targets: list[Any] = []
@@ -501,14 +518,8 @@ class _Emitter:
         pos = 0
         for where, run in groupby(wheres):  # the check units, by runs of one scope
             size = len(list(run))
-            self.units.add_jointtarget_declarations(*where, texts[pos:pos + size])
+            add_units(*where, texts[pos:pos + size])
             pos += size
-
-    def _extend_block(self, anchor: Any, target: Any, where: tuple[str, str | None],
-                      texts: list[str]) -> None:
-        """Queue jointtarget declarations at one anchor (`_add_declaration`'s second half)."""
-        self._queue(anchor, target, texts)
-        self.units.add_jointtarget_declarations(*where, texts)
 
     def _queue(self, anchor: Any, target: Any, texts: list[str]) -> None:
         """Queue declarations at an anchor (after `target`, a declaration, or among the
@@ -527,13 +538,66 @@ class _Emitter:
         if not filtered_sites:
             return
         t, p = self.planned.targets, self.solved
-        rows_all = [r for i in filtered_sites for r in self.sites[i].rows]
+        sites = list(map(self.sites.__getitem__, filtered_sites))
+        rows_all = [r for site in sites for r in site.rows]
         rows_a = np.array(rows_all, dtype=int)
         tcp = t.placement.take(rows_a).tcp(self.robot.fk(p.q_cmd[rows_a]))
         conf = self.robot.confdata(p.q_cmd[rows_a])
-        f_literal = dict(zip(rows_all, robtarget_literals(tcp, conf, t.extax[rows_a])))
+        literals = robtarget_literals(tcp, conf, t.extax[rows_a])
+        del tcp, conf
+        if not self._columns:  # the reference: move by move
+            self._filtered_moves(sites, dict(zip(rows_all, literals)))
+            return
+        operands = list(map(t.operand.__getitem__, rows_all))
+        replaced = self._filtered_declarations(operands, literals)
+        self._filtered_columns(sites, rows_all, operands, literals, replaced)
+
+    def _filtered_declarations(self, operands: list[Operand], literals: list[str]) -> set[int]:
+        """Write the filtered robtarget into the declarations of the targets named that
+        only compensated moves use, all with one literal; the ids of those declarations.
+        `operands` and `literals`: the filtered targets' (a row each)."""
+        by_decl: dict[int, list[int]] = {}  # a declaration -> its targets (indices)
+        add = by_decl.setdefault
+        for n, op in enumerate(operands):
+            if op.declaration is not None and op.form == "name":
+                add(id(op.declaration), []).append(n)
+        if not by_decl:
+            return set()
+        groups = list(by_decl.values())
+        decls = [operands[found[0]].declaration for found in groups]
+        keys = [decl.name.lower() for decl in decls]
+        uses = count_identifiers(self.program.text, keys)
+        # a declaration takes its targets' literal when all have one and nothing else
+        # names it (the declaration's own name and its targets' are all its uses)
+        chosen = [k for k, (key, found, decl) in enumerate(zip(keys, groups, decls))
+                  if uses[key] == 1 + len(found) and decl.syntax.init is not None
+                  and (len(found) == 1
+                       or all(literals[n] == literals[found[0]] for n in found))]
+        if not chosen:
+            return set()
+        text = self.program.text
+        syntaxes = [decls[k].syntax for k in chosen]
+        starts = [syntax.start for syntax in syntaxes]
+        ends = [syntax.end for syntax in syntaxes]
+        news = [text[start:syntax.init.start] + literals[groups[k][0]]
+                + text[syntax.init.end:end]
+                for k, syntax, start, end in zip(chosen, syntaxes, starts, ends)]
+        self.editor.replace_many(starts, ends, news)
+        pos = 0
+        scopes = [(decls[k].module, decls[k].routine) for k in chosen]
+        for where, run in groupby(scopes):  # the check units, by runs of one scope
+            size = len(list(run))
+            self.units.add_declarations(*where, news[pos:pos + size])
+            pos += size
+        return {id(decls[k]) for k in chosen}
+
+    def _filtered_moves(self, sites: list[Site], f_literal: dict[int, str]) -> None:
+        """The declarations that take the filtered robtarget, the moves' statements and
+        new robtargets, move by move (the reference for `_filtered_declarations` and
+        `_filtered_columns`); `f_literal` the filtered robtarget of each row."""
+        t = self.planned.targets
         by_decl: dict[int, list[int]] = {}
-        for row in rows_all:
+        for row in f_literal:
             op = t.operand[row]
             if op.form == "name" and op.declaration is not None:
                 by_decl.setdefault(id(op.declaration), []).append(row)
@@ -552,8 +616,7 @@ class _Emitter:
                 self.editor.replace(decl.span, new)
                 self.units.add_declaration(decl.module, decl.routine, new)
         names: dict[tuple[str, str], str] = {}
-        for i in filtered_sites:
-            site = self.sites[i]
+        for site in sites:
             edits: list[tuple] = []
             for slot, row in enumerate(site.rows):
                 op = t.operand[row]
@@ -573,6 +636,62 @@ class _Emitter:
                 edits.append((op.value_span.start, op.value_span.end, name))
             ident = self._replace_statement(site, edits)
             self.checks.extend((ident, slot, row) for slot, row in enumerate(site.rows))
+
+    def _filtered_columns(self, sites: list[Site], rows: list[int], operands: list[Operand],
+                          literals: list[str], replaced: set[int]) -> None:
+        """`_filtered_moves` as columns over all targets (rows, their operands and
+        filtered literals): the targets that need a new robtarget named and declared
+        together (`_data_names`), the statements made by list operations."""
+        site_of = [k for k, site in enumerate(sites) for _ in site.rows]
+        slot_of = [slot for site in sites for slot in range(len(site.rows))]
+        # what goes in place of each target's value: None (its declaration holds the
+        # filtered robtarget), the literal (inline) or a name (filled in below)
+        new: list[str | None] = [None] * len(operands)
+        named: list[int] = []
+        for n, op in enumerate(operands):
+            form = op.form
+            if form == "inline":
+                new[n] = literals[n]
+            elif not (form == "name" and op.declaration is not None
+                      and id(op.declaration) in replaced):
+                named.append(n)
+        if named:
+            motions = [sites[site_of[n]].motion for n in named]
+            # the declaration goes beside the robtarget of the site's own operand
+            named_ops = [sites[site_of[n]].targets[slot_of[n]] for n in named]
+            stems = self._stems(motions, named_ops)
+            names = self._data_names(stems, [literals[n] for n in named], motions, named_ops,
+                                     {}, "ft_", robtarget_declaration, joint=False)
+            for n, name in zip(named, names):
+                new[n] = name
+        # the statements: a site's text with its targets' values replaced
+        text = self.program.text
+        motions = [site.motion for site in sites]
+        syntaxes = [motion.syntax for motion in motions]
+        if len(operands) == len(sites):  # a target a site (the usual case)
+            statements = [text[syntax.start:syntax.end] if value is None
+                          else text[syntax.start:span.start] + value + text[span.end:syntax.end]
+                          for syntax, span, value in zip(
+                              syntaxes, [op.argument.value for op in operands], new)]
+            edited = [k for k, value in enumerate(new) if value is not None]
+        else:  # a site of several targets (a MoveC) by its edits
+            statements = []
+            edited = []  # the sites whose statement changes
+            n = 0
+            for k, site in enumerate(sites):
+                size = len(site.rows)
+                edits = [(operands[m].argument.value.start, operands[m].argument.value.end,
+                          new[m]) for m in range(n, n + size) if new[m] is not None]
+                statements.append(statement_variant(self.program, site.motion, edits))
+                if edits:
+                    edited.append(k)
+                n += size
+        self.editor.replace_many([syntaxes[k].start for k in edited],
+                                 [syntaxes[k].end for k in edited],
+                                 [statements[k] for k in edited])
+        idents = self.units.add_statements([motion.module for motion in motions],
+                                           [motion.routine for motion in motions], statements)
+        self._add_checks([idents[k] for k in site_of], rows, slot_of)
 
     def _flush_declarations(self) -> None:
         """Insert the queued declarations, in the order their anchors were first used
@@ -594,14 +713,17 @@ class _Emitter:
                 self.editor.insert_declaration(target, [block] if type(block) is str else block)
         self.editor.insert_lines_after(after, after_texts)
 
-    def _add_checks(self, idents: Sequence[int], rows: Sequence[int]) -> None:
-        """Checks of slot 0 for many statements at once, kept as one (k,3) array (a
-        hundred thousand tuples of three ints cost several times as much)."""
+    def _add_checks(self, idents: Sequence[int], rows: Sequence[int],
+                    slots: Sequence[int] | None = None) -> None:
+        """Checks of many statements at once (of slot 0, or of `slots`), kept as one (k,3)
+        array (a hundred thousand tuples of three ints cost several times as much)."""
         if self.checks:  # the checks made move by move before these keep their place
             self._check_columns.append(np.array(self.checks, dtype=int).reshape(-1, 3))
             self.checks = []
         block = np.zeros((len(rows), 3), dtype=int)
         block[:, 0] = idents
+        if slots is not None:
+            block[:, 1] = slots
         block[:, 2] = rows
         self._check_columns.append(block)
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import re
 from collections import Counter
 from collections.abc import Iterable
+from itertools import repeat
 
 MAX_IDENTIFIER = 32
 #: an identifier-shaped word of RAPID text (keywords included)
@@ -40,43 +41,122 @@ def identifier_counts(text: str) -> Counter[str]:
     return Counter(map(str.lower, IDENTIFIER.findall(text)))
 
 
-_WORD_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_")
-_LETTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ")
+#: names up to this many are found by one pattern built from them (compiling it costs
+#: about 15 µs a name); more are found by their first letters and looked up
+_PATTERN_NAMES = 1000
+#: the names found after digits or underscores by the first letters' route: up to this
+#: many by one pattern of them, more place by place
+_LATE_NAMES = 1000
+#: longer names stand in that pattern as plain alternatives (bounded nesting)
+_TRIE_DEPTH = 64
+_NAME_SHAPE = re.compile(r"[a-z][a-z0-9_]*")
+_NAME_LINES = re.compile(r"[a-z][a-z0-9_]*(?:\n[a-z][a-z0-9_]*)*")  # names joined by newlines
+_NOT_LETTERS = frozenset("0123456789_")  # word characters other than letters
+_LETTERS = frozenset("abcdefghijklmnopqrstuvwxyz")
 
 
-#: above this many names one count of every word is quicker than a search for each
-_SEARCHED_NAMES = 8
+def _ascii_lowered(text: str) -> str:
+    """The text lower-cased in ASCII, every other character one '?' (not a word character
+    either): the same words at the same offsets (a non-ASCII character may lower-case to
+    two, or to an ASCII letter, as the Kelvin sign does)."""
+    if text.isascii():
+        return text.lower()
+    return text.encode("ascii", "replace").decode("ascii").lower()
+
+
+def _trie(names: Iterable[str]) -> str:
+    """A regular expression matching exactly `names` (lower-case words), shaped as their
+    prefix tree so that the engine follows one branch per character read."""
+    root: dict = {}
+    for name in names:
+        node = root
+        for char in name:
+            node = node.setdefault(char, {})
+        node[""] = True
+
+    def branch(node: dict) -> str:
+        ends = "" in node
+        alternatives = [char + branch(child) for char, child in sorted(node.items()) if char]
+        if not alternatives:
+            return ""
+        body = (alternatives[0] if len(alternatives) == 1 and not ends
+                else "(?:" + "|".join(alternatives) + ")")
+        return body + "?" if ends else body
+
+    return branch(root)
+
+
+def _starts_word(lowered: str, start: int) -> bool:
+    """True when a word of `IDENTIFIER.findall` starts at `start` (a letter): no letter in
+    the run of word characters before it."""
+    back = start - 1
+    while back >= 0 and lowered[back] in _NOT_LETTERS:
+        back -= 1
+    return back < 0 or lowered[back] not in _LETTERS
+
+
+def _pattern_counts(lowered: str, names: set[str]) -> dict[str, int]:
+    """How often each of `names` (lower-case identifier-shaped words) stands as a word of
+    `lowered`: one pattern of them all finds each place a name ends a run of word
+    characters; a place counts when no letter precedes it in that run."""
+    short = [name for name in names if len(name) <= _TRIE_DEPTH]
+    long = [name for name in names if len(name) > _TRIE_DEPTH]
+    pattern = "|".join(filter(None, [_trie(short), *long]))
+    counts = dict.fromkeys(names, 0)
+    for match in re.finditer(f"(?:{pattern})(?![a-z0-9_])", lowered):
+        if _starts_word(lowered, match.start()):
+            counts[match.group()] += 1
+    return counts
+
+
+def _first_letter_counts(lowered: str, names: set[str]) -> dict[str, int]:
+    """`_pattern_counts` for many names: every word starting with one of the names' first
+    letters after a character that is not a word character (or at the text's start) is
+    counted; the names that also follow digits or underscores somewhere (`1_p1` holds
+    `p1`) are then counted in full by `_pattern_counts` or, when there are many, their
+    places after digits or underscores added one by one."""
+    letters = "".join(sorted({name[0] for name in names}))
+    # the first letter, then a look back at it and the character before (a pattern
+    # beginning with a class of letters is searched for quickly)
+    words = Counter(re.findall(f"[{letters}](?<![a-z0-9_].)[a-z0-9_]*", lowered))
+    counts = dict(zip(names, map(words.get, names, repeat(0))))
+    after = f"[{letters}](?<=[0-9_].)[a-z0-9_]*"  # after a digit or an underscore
+    late = names.intersection(re.findall(after, lowered))
+    if not late:
+        return counts
+    if len(late) <= _LATE_NAMES:
+        counts.update(_pattern_counts(lowered, late))
+        return counts
+    # many (a program already compensated holds `jt_p1` beside `p1`): each place is
+    # looked at, too many names for one pattern of them
+    for match in re.finditer(after, lowered):
+        word = match.group()
+        if word in late and _starts_word(lowered, match.start()):
+            counts[word] += 1
+    return counts
 
 
 def count_identifiers(text: str, names: Iterable[str]) -> dict[str, int]:
-    """`identifier_counts(text)[name]` for a few lower-case `names` only: each name is
+    """`identifier_counts(text)[name]` for the lower-case `names` only: the names are
     searched for, not every word of the text counted (a large program holds millions).
 
     A place where the name stands counts when a word of `IDENTIFIER.findall` starts
     there (a letter, with no letter in the run of word characters before it) and ends
-    there (no word character after it). Text that is not ASCII, or more than
-    `_SEARCHED_NAMES` names (each search reads the whole text), are counted word by word.
+    there (no word character after it). A name that is not a lower-case identifier
+    counts 0.
     """
     wanted = set(names)
-    if len(wanted) > _SEARCHED_NAMES or not text.isascii():
-        counts = identifier_counts(text)
-        return {name: counts.get(name, 0) for name in wanted}
-    lowered = text.lower()
-    out = {}
-    for name in wanted:
-        n, size, pos = 0, len(name), lowered.find(name) if name else -1
-        while pos >= 0:
-            end = pos + size
-            if end >= len(lowered) or lowered[end] not in _WORD_CHARS:
-                back = pos - 1
-                while back >= 0 and lowered[back] in _WORD_CHARS \
-                        and lowered[back] not in _LETTERS:
-                    back -= 1
-                if back < 0 or lowered[back] not in _LETTERS:
-                    n += 1
-            pos = lowered.find(name, pos + 1)
-        out[name] = n
-    return out
+    joined = "\n".join(wanted)
+    if joined.count("\n") == len(wanted) - 1 and _NAME_LINES.fullmatch(joined):
+        words = wanted  # all identifier-shaped (the usual case): checked at once
+    else:
+        words = {name for name in wanted if _NAME_SHAPE.fullmatch(name)}
+    if not words:
+        return dict.fromkeys(wanted, 0)
+    lowered = _ascii_lowered(text)
+    counts = (_pattern_counts(lowered, words) if len(words) <= _PATTERN_NAMES
+              else _first_letter_counts(lowered, words))
+    return counts if words is wanted else {name: counts.get(name, 0) for name in wanted}
 
 
 class NameAllocator:

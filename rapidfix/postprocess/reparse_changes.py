@@ -51,6 +51,11 @@ class CheckUnits:
         self._decls.setdefault((module, routine), []).append(text)
         self._other_decls.setdefault((module, routine), []).append(text)
 
+    def add_declarations(self, module: str, routine: str | None, texts: list[str]) -> None:
+        """`add_declaration` for many declarations of one scope."""
+        self._decls.setdefault((module, routine), []).extend(texts)
+        self._other_decls.setdefault((module, routine), []).extend(texts)
+
     def add_statement(self, module: str, routine: str, text: str) -> int:
         """A new or replaced motion instruction; returns its id."""
         ident = self._count

@@ -64,6 +64,22 @@ def test_the_written_out_declaration_is_what_format_declaration_writes(name, row
     assert program.declarations[0].name == name
 
 
+@settings(max_examples=50, deadline=None)
+@given(st.from_regex(r"ft_[A-Za-z0-9_]{0,29}", fullmatch=True),
+       st.tuples(st.floats(-3000, 3000), st.floats(-3000, 3000), st.floats(-3000, 3000)))
+def test_the_written_out_robtarget_declaration_is_what_format_declaration_writes(name, xyz):
+    from rapidfix.postprocess.emission_forms import robtarget_declaration
+    from rapidfix.rapid import parse_program
+    from rapidfix.rapid.format import format_declaration, format_robtarget
+
+    literal = format_robtarget(xyz, (1, 0, 0, 0), (0, -1, 0, 1), [9e9] * 6)
+    text = robtarget_declaration(name, literal)
+    assert text == format_declaration("CONST", "robtarget", name, literal)
+    program = parse_program(f"MODULE M\n  {text}\nENDMODULE\n")
+    assert program.declarations[0].name == name
+    assert program.declarations[0].type_key == "robtarget"
+
+
 def test_jointtarget_literals_of_a_large_block_round_as_python_formats_each_number():
     """The digits built in numpy for a whole block: halves exactly between two millionths
     (k/128), numbers a rounding error away from a half, every magnitude below 1e8,
@@ -148,3 +164,22 @@ def test_robtarget_literals_are_what_format_robtarget_writes(rows):
     want = [format_robtarget(p, q, c, e) for p, q, c, e in
             zip(pos.tolist(), quat.tolist(), conf.tolist(), extax.tolist())]
     assert robtarget_literals(tcp, conf, extax) == want
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.integers(-5, 5), min_size=4, max_size=4), min_size=1, max_size=40),
+       st.sampled_from([1, 10**6, 2**40, 2**58, 2**60]), st.sampled_from(["i8", "i4", "f8"]))
+def test_each_distinct_row_written_once_gives_each_row_its_text(rows, scale, dtype):
+    """`_distinct_texts`: the text of each row, whether the rows are integers (confdata,
+    found distinct as one number a row; ranges too wide for one number are sorted as
+    rows) or not."""
+    from rapidfix.postprocess.emission_forms import _distinct_texts
+
+    array = np.array(rows, dtype=np.int64)
+    array[:, 0] *= scale if dtype != "i4" else 1
+    array = array.astype(dtype)
+
+    def text(row):
+        return "[" + ",".join(map(str, row)) + "]"
+
+    assert _distinct_texts(array, text) == [text(row) for row in array.tolist()]

@@ -112,18 +112,48 @@ def test_a_thousand_long_names_cut_alike_are_distinct_and_numbered_in_order():
                                    "PositionOfTheLeftBracket" + str(k)) for k in range(1, 1000)]
 
 
-def test_counting_a_few_names_agrees_with_counting_every_word():
-    """`count_identifiers` searches for the names it is asked about; on random texts of
-    letters, digits, underscores and separators it gives the counts of the full
-    word-by-word count (words after digits or underscores, words inside words)."""
-    import random
+# texts of letters (two cases), digits, underscores, separators and characters that are
+# not ASCII (one lower-cases to two characters, one to an ASCII letter)
+_WORDY = st.text(alphabet="abpAP_19 ,;\n!xéKİ", max_size=80)
+_NAMES = st.lists(st.one_of(st.sampled_from(["a", "ab", "p1", "b_1", "x", "ba", "P1", "", "1a",
+                                             "é", "k", "i", "a\nb", "ab\n"]),
+                            st.from_regex(r"[abp][abp19_]{0,3}", fullmatch=True),
+                            st.text(alphabet="abpAP19_é", max_size=4)), max_size=12)
 
+
+@settings(max_examples=300, deadline=None)
+@given(text=_WORDY, names=_NAMES, pieces=st.lists(st.sampled_from(
+    ["p1", "1_p1", "ap1", "p1a", "_p1", "9E+09", "é", "p1_2", "AB", "b_1"]), max_size=8))
+def test_counting_names_agrees_with_counting_every_word(text, names, pieces):
+    """`count_identifiers` finds the names it is asked about (one pattern of them, or
+    their first letters and a look-up for many): on random texts it gives the counts of
+    the full word-by-word count (words after digits or underscores, words inside words,
+    text that is not ASCII, names that are not lower-case identifiers), by both routes
+    and with the names of the text's own words added."""
+    from rapidfix.postprocess import naming
     from rapidfix.postprocess.naming import count_identifiers, identifier_counts
 
-    rng = random.Random(5)
-    for _ in range(2000):
-        text = "".join(rng.choice("abAB_19 ,;\n!xé") for _ in range(rng.randint(0, 60)))
-        counts = identifier_counts(text)
-        for names in (["ab", "a", "b_1", "x", "ba"], [*counts, "ab", "a", "b_1", "x", "ba"]):
-            got = count_identifiers(text, names)  # a few names searched, many counted
-            assert got == {name: counts.get(name, 0) for name in names}, text
+    text = " ".join([text, *pieces]) if pieces else text
+    counts = identifier_counts(text)
+    for asked in (names, [*names, *counts]):
+        want = {name: counts.get(name, 0) for name in asked}
+        assert count_identifiers(text, asked) == want
+        limits = naming._PATTERN_NAMES, naming._LATE_NAMES
+        try:  # the route for many names (the first letters), on these few, with the
+            # names also found after digits or underscores by a pattern or place by place
+            for late in (1000, 0):
+                naming._PATTERN_NAMES, naming._LATE_NAMES = 0, late
+                assert count_identifiers(text, asked) == want
+        finally:
+            naming._PATTERN_NAMES, naming._LATE_NAMES = limits
+
+
+def test_counting_names_longer_than_the_pattern_tree_is_exact():
+    from rapidfix.postprocess.naming import _TRIE_DEPTH, count_identifiers, identifier_counts
+
+    long = "p" * (_TRIE_DEPTH + 5)
+    text = f"{long} 1_{long} a{long} {long}1 {long[:-1]} {long.upper()};p1"
+    counts = identifier_counts(text)
+    names = [long, long[:-1], long + "1", "p1", "p" * _TRIE_DEPTH]
+    assert count_identifiers(text, names) == {name: counts.get(name, 0) for name in names}
+    assert counts[long] == 3  # as itself, after '1_', upper-cased

@@ -25,6 +25,7 @@ from rapidfix.rapid.readback import read_bulk
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from cam_program import cam_program
+from odd_shapes import odd_program
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mod", ".prg"))
@@ -156,15 +157,76 @@ def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, com
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("name", [*PROGRAMS, "cam"])
-def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name):
-    data = cam_program(200).encode() if name == "cam" else (SAMPLES / name).read_bytes()
-    columns = rewrite_source(data, name, comp, RewriteOptions())
+def _filtered_cases() -> str:
+    """A program whose filtered robtargets take every way: declarations that take the
+    filtered robtarget (used by one move, or by two with the same literal), names used
+    elsewhere too or by two moves with different literals (a new robtarget after the
+    declaration, LOCAL after a LOCAL one, one whose name is taken), Offs and RelTool of
+    a name (one declaration for the same literal, a numbered one for another), inline
+    targets, a MoveC with one target inline or both new, a routine's own declaration."""
+    lines = cam_program(8).splitlines()
+    decls = [line for line in lines if "CONST robtarget" in line]
+    literal = decls[6].split(":=", 1)[1].rstrip(";")
+    inline = literal.replace("-147.000", "-146.250", 1)
+    move = ", v100, z1, tMill\\WObj:=wPlate;"
+    body = [
+        lines[1].replace("tMill:=[TRUE,[[0,0,100]", "tMill2:=[TRUE,[[0,0,102]"),
+        f"  LOCAL CONST robtarget q1:={literal};",
+        f"  CONST robtarget ft_p3:={literal};",
+        "  VAR robtarget pTmp;",
+        "  PROC main()",
+        "    MoveJ p0, v500, fine, tMill\\WObj:=wPlate;",
+        f"    MoveL p1{move}", f"    MoveL p1{move}",
+        f"    MoveL p2{move}", "    pTmp := p2;",
+        f"    MoveL Offs(p3, 0, 0, 1){move}", f"    MoveL Offs(p3, 0, 0, 1){move}",
+        f"    MoveL Offs(p3, 0, 0, 2){move}", f"    MoveL p3{move}",
+        f"    MoveL {inline}{move}",
+        f"    MoveL RelTool(p4, 0, 0, 5){move}", f"    MoveL p4{move}",
+        f"    MoveC {inline}, p5{move}", f"    MoveL p5{move}",
+        f"    MoveC Offs(p6, 0, 2, 0), {inline}{move}",
+        f"    MoveL q1{move}", f"    MoveL Offs(q1, 1, 0, 0){move}",
+        "  ENDPROC",
+        "  PROC other()",
+        f"    CONST robtarget r1:={inline};",
+        f"    MoveL r1{move}", f"    MoveL r1{move}", "    pTmp := r1;", f"    MoveL p2{move}",
+        f"    MoveL p7{move}", f"    MoveL p7{move.replace('tMill', 'tMill2')}",
+        "  ENDPROC",
+        "ENDMODULE",
+    ]
+    return "\n".join([*lines[:3], *decls, *body]) + "\n"
+
+
+_STACKED = odd_program("stacked", 300)
+
+
+@pytest.mark.parametrize("emit", ["jointtargets", "robtargets"])
+@pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked"])
+def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name,
+                                                                        emit):
+    data = (cam_program(200) if name == "cam" else _filtered_cases()
+            if name == "filtered_cases" else _STACKED if name == "stacked"
+            else (SAMPLES / name).read_bytes())
+    data = data.encode() if isinstance(data, str) else data
+    options = RewriteOptions(emit=emit, force=True)
+    columns = rewrite_source(data, name, comp, options)
     monkeypatch.setattr(emission_module._Emitter, "_columns", False)
-    one_by_one = rewrite_source(data, name, comp, RewriteOptions())
+    one_by_one = rewrite_source(data, name, comp, options)
     assert columns.data == one_by_one.data
     assert one_by_one.moves_compensated == columns.moves_compensated
     assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm
+    if name == "filtered_cases" and emit == "robtargets":
+        # every way a filtered robtarget is written was taken
+        out = columns.data.decode()
+        for declared in ["LOCAL CONST robtarget ft_q1:=", "CONST robtarget ft_p2:=",
+                         "CONST robtarget ft_p3_2:=", "CONST robtarget ft_p3_offs:=",
+                         "CONST robtarget ft_p3_offs_2:=", "CONST robtarget ft_p4_reltool:=",
+                         "CONST robtarget ft_q1_offs:=", "    CONST robtarget ft_r1:=",
+                         "CONST robtarget ft_p6_offs:=", "CONST robtarget ft_p7:=",
+                         "CONST robtarget ft_p7_2:="]:
+            assert out.count(declared) == 1, declared
+        assert out.count("MoveL ft_p3_offs,") == 2 and "MoveL p1," in out
+        assert "MoveC [[" in out and "MoveC ft_p6_offs, [[" in out and "MoveL [[" in out
+        assert columns.moves_compensated == 21
 
 
 def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_route():
