@@ -394,10 +394,7 @@ def _value_node(text: str, start: int) -> s.Expr:
     if text[0] == '"' and _WHOLE_STRING.fullmatch(text):
         return s.String(start, start + len(text), string_value(text))
     if not (PLAIN_VALUE.fullmatch(text) or _PLAIN_AGGREGATE.fullmatch(text)):
-        try:
-            return read_expression(text, start, condition=True)
-        except NotRead:
-            raise NotFast(text) from None
+        return _read(text, start)
     end = start + len(text)
     first = text[0]
     if first == "[":
@@ -406,10 +403,7 @@ def _value_node(text: str, start: int) -> s.Expr:
                 return _deep_aggregate(text, start, _RESTS)
             return s.NumericAggregate(start, end, aggregate_value(text))
         except NotFast:  # the loose pattern let arithmetic through: [1-1,2]
-            try:
-                return read_expression(text, start, condition=True)
-            except NotRead:
-                raise NotFast(text) from None
+            return _read(text, start)
     if first.isdigit() or first == ".":
         return s.Number(start, end, number_value(text), text)
     if first == "-":
@@ -424,6 +418,21 @@ def _value_node(text: str, start: int) -> s.Expr:
 
 
 _WHOLE_STRING = re.compile(STRING)
+def _read(text: str, start: int) -> s.Expr:
+    """read_expression(text, start) of a condition (NotFast where it gives up). A program
+    repeats its expressions (`nCount + 1`, `nCount < 3`): each text is read once, and
+    read again as the first's nodes moved to where it stands."""
+    known = _READ.get(text)
+    if known is not None:
+        return _moved(known, start - known.start)
+    try:
+        node = read_expression(text, start, condition=True)
+    except NotRead:
+        raise NotFast(text) from None
+    _READ.keep(text, node)
+    return _moved(node, 0)  # the kept nodes are nobody's
+
+
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.
 _PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
 # An index of an array element, or a dimension: a number or a name.
@@ -586,9 +595,10 @@ class CallTail:
 
 
 # Distinct call tails kept across tokens and files (a CAM program has a few dozen),
-# of procedure calls and of function calls.
+# of procedure calls and of function calls, and the expressions read by _read.
 _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
+_READ: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.Statement]:
@@ -767,7 +777,7 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
 def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails, aggregate rests and
     number groups): their memory back, and the next file read from a known start."""
-    for memo in (_TAILS, _INNER_TAILS, _RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _READ, _RESTS, _GROUP_CACHE):
         memo.clear()
 
 
@@ -841,9 +851,11 @@ def _head_parts(head: Token, kind: str) -> list[Any]:
         else:
             value = text.strip(_WS_CHARS)
             start = head.start_pos + m.start(index) + len(text) - len(text.lstrip(_WS_CHARS))
+            if kind != "case":
+                parts.append(_read(value, start))
+                continue
             try:
-                parts.append(read_list(value, start) if kind == "case" else
-                             read_expression(value, start, condition=True))
+                parts.append(read_list(value, start))
             except NotRead:
                 raise NotFast(value) from None
     return parts
