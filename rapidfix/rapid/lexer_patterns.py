@@ -5,8 +5,8 @@ accepts, compiled as one alternation on first use. The fast terminals
 (`fastpath`: a whole run of declarations or calls, several kilobytes of pattern) are
 accepted in several states, so every one of those compiled them again: about 0.1 s
 of a small file's `rapidfix check`, more than its parse. Here a scanner matches each
-large terminal at the head of its list with its own pattern (the same text in every
-state, so `re`'s cache compiles it once) and the rest as Lark does. Tried in the same
+large terminal at the head of its list with its own pattern, compiled once for every
+state, and the rest as Lark does. Tried in the same
 order as the alternation would try them, the first that matches wins, so the tokens
 are the same.
 """
@@ -23,8 +23,14 @@ from lark.lexer import BasicLexer, Scanner
 LARGE_PATTERN = 1000
 
 
+# Each large terminal's compiled expression, by its name, pattern and flags: kept here,
+# not left to `re`'s own cache, which a long process (a batch, the test suite) fills
+# with other patterns and empties oldest first.
+_COMPILED: dict[tuple[str, str, Any, Any], list[Any]] = {}
+
+
 class _SharingScanner(Scanner):
-    """Lark's scanner, with the leading large terminals each compiled alone."""
+    """Lark's scanner, with the leading large terminals each compiled alone, once."""
 
     def _build_mres(self, terminals: list[Any], max_size: int) -> list[Any]:
         head = 0
@@ -32,7 +38,11 @@ class _SharingScanner(Scanner):
             head += 1
         mres = []
         for terminal in terminals[:head]:
-            mres.extend(super()._build_mres([terminal], 1))
+            key = (terminal.name, terminal.pattern.to_regexp(), self.g_regex_flags, self.re_)
+            compiled = _COMPILED.get(key)
+            if compiled is None:
+                compiled = _COMPILED[key] = super()._build_mres([terminal], 1)
+            mres.extend(compiled)
         rest = terminals[head:]
         return mres + (super()._build_mres(rest, len(rest)) if rest else [])
 

@@ -9,7 +9,7 @@ from lark import Lark
 
 from rapidfix.rapid.fastpath import FastSyntaxBuilder, cached_extension, fast_parser
 from rapidfix.rapid.grammar import grammar_text
-from rapidfix.rapid.lexer_patterns import LARGE_PATTERN
+from rapidfix.rapid.lexer_patterns import LARGE_PATTERN, share_large_patterns
 from rapidfix.rapid.readback import run_parser
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
@@ -45,3 +45,26 @@ def test_the_same_trees_as_lark_own_scanners():
     for sample in sorted(SAMPLES.glob("*.mod")):
         text = sample.read_text(encoding="utf-8", errors="replace")
         assert repr(fast_parser().parse(text)) == repr(own.parse(text)), sample.name
+
+
+def test_the_large_patterns_stay_shared_when_res_cache_is_emptied(monkeypatch):
+    """A long process (a batch, the test suite, a count of many names) compiles more
+    patterns than `re` keeps: the large terminals must still be compiled once for all
+    states, not again in every state built after `re` dropped them."""
+    import re
+
+    from rapidfix.rapid import lexer_patterns
+
+    build = lexer_patterns._SharingScanner._build_mres
+
+    def build_after_churn(self, terminals, max_size):
+        for k in range(600):  # more than re's cache holds
+            re.compile(f"churn{k}_{id(self)}")
+        return build(self, terminals, max_size)
+
+    monkeypatch.setattr(lexer_patterns._SharingScanner, "_build_mres", build_after_churn)
+    grammar = grammar_text()
+    parser = share_large_patterns(Lark(grammar + cached_extension(grammar), parser="lalr",
+                                       lexer="contextual", transformer=FastSyntaxBuilder(),
+                                       cache=True))
+    test_each_large_pattern_is_one_compiled_expression_in_every_state(lambda: parser)
