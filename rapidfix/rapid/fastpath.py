@@ -264,22 +264,48 @@ def grammar_extension(grammar: str) -> str:
     )
 
 
+class LazyPattern:
+    """A regular expression compiled on its first use. The splitting patterns below hold
+    the values' pattern several times (a few ms each to compile): a command that reads
+    one small file with the plain grammar (rapidfix.rapid.parse) never needs them."""
+
+    __slots__ = ("_compiled", "_text")
+
+    def __init__(self, text: str) -> None:
+        self._text, self._compiled = text, None
+
+    @property
+    def compiled(self) -> re.Pattern[str]:
+        if self._compiled is None:
+            self._compiled = re.compile(self._text)
+        return self._compiled
+
+    def match(self, text: str, pos: int = 0) -> re.Match[str] | None:
+        return self.compiled.match(text, pos)
+
+    def finditer(self, text: str) -> Any:
+        return self.compiled.finditer(text)
+
+    def findall(self, text: str) -> list[Any]:
+        return self.compiled.findall(text)
+
+
 # Splitting a call whose syntax the lexer has checked: after its name (or its
 # first argument), one piece is an optional argument, a required value or the ';'.
-CALL_PIECE = re.compile(
+CALL_PIECE = LazyPattern(
     rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({VALUE_TEXT}))?"
     rf"|({VALUE_TEXT})|(;))"
 )
 
 
-def declaration_pattern(modifiers: bool) -> re.Pattern[str]:
+def declaration_pattern(modifiers: bool) -> LazyPattern:
     """Splits a declaration whose syntax has been checked: (LOCAL, TASK, storage,) type,
     name, (the inside of its dimensions' braces,) and value text; the groups in
     parentheses only with `modifiers`."""
     def group(pattern: str) -> str:
         return f"({pattern})" if modifiers else pattern
 
-    return re.compile(
+    return LazyPattern(
         rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
         rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
@@ -351,7 +377,7 @@ def aggregate_value(text: str) -> tuple:
 
 # Splitting the inside of a checked function call: one piece is an optional
 # argument, a required value or the closing parenthesis.
-_INNER_PIECE = re.compile(
+_INNER_PIECE = LazyPattern(
     rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
     rf"|({_CALL_TEXT}|{_SIMPLE_TEXT})|(\)))"
 )
@@ -364,7 +390,7 @@ def _call_node(text: str, start: int) -> s.Call:
     like split_calls' LazyCall: `Offs(p1,0,0,10)` and `Offs(p2,0,0,10)` share `,0,0,10)`)."""
     open_at = text.index("(")
     name = text[:open_at].rstrip(_WS_CHARS)
-    first = _INNER_PIECE.match(text, open_at + 1)
+    first = _INNER_PIECE.compiled.match(text, open_at + 1)
     value = first.group(4)
     if value is None:  # an optional argument first, or no argument
         head, tail_at = None, open_at + 1
@@ -496,7 +522,7 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
+_CALL_HEAD = LazyPattern(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
 # The rest of a checked statement, up to its ';' (strings may hold one).
 _STATEMENT_END = re.compile(rf'(?:[^;"]+|{STRING})*;')
 # Distinct argument tails kept (a CAM program has a few dozen).
@@ -527,7 +553,7 @@ def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
     return _nested, start, end, (node,)
 
 
-def _tail(text: str, pieces: re.Pattern[str]) -> tuple[_TailArgument, ...]:
+def _tail(text: str, pieces: LazyPattern) -> tuple[_TailArgument, ...]:
     """The arguments in checked call text that follows a call's name or first argument,
     split by `pieces` (CALL_PIECE, or _INNER_PIECE inside a function call)."""
     entries: list[_TailArgument] = []
@@ -554,7 +580,7 @@ class CallTail:
 
     __slots__ = ("entries",)
 
-    def __init__(self, text: str | None, pieces: re.Pattern[str] = CALL_PIECE) -> None:
+    def __init__(self, text: str | None, pieces: LazyPattern = CALL_PIECE) -> None:
         self.entries = () if text is None else _tail(text, pieces)
 
     def after_first(self) -> CallTail | None:
@@ -617,7 +643,7 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     calls: list[s.Statement] = []
     tails = _TAILS
     argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
-    head, find, piece_at = _CALL_HEAD.match, text.index, CALL_PIECE.match
+    head, find, piece_at = _CALL_HEAD.compiled.match, text.index, CALL_PIECE.compiled.match
     quote, statement_end = text.find, _STATEMENT_END.match
     pos, size = 0, len(text)
     while pos < size:
@@ -730,7 +756,7 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     append = decls.append
     rests, storages = _RESTS, _STORAGES
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
-    for m in _DECL.finditer(text):
+    for m in _DECL.compiled.finditer(text):
         local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:
