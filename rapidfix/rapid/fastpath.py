@@ -25,18 +25,18 @@ signs, `+ - * / DIV MOD`, parentheses, record components and array elements
 `vWeld{i+1}`), and aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those
 values are read by fast_expressions' reader, which follows the grammar's expression
 rules and gives up (NotFast) on anything it does not build exactly. A value may also
-be TRUE or FALSE, or a string (`TPWrite "Point 1, reached; ok"`, also in a sum:
-`"Count: " + NumToStr(n,0)`). Anything else in a statement — a comment inside it, a
-relation or logical operator, another keyword, a named or conditional argument, calls
-nested deeper — ends the run, and that statement is parsed by the full grammar as
-before.
+be TRUE or FALSE, a string (`TPWrite "Point 1, reached; ok"`, also in sums, calls and
+parentheses: `"Count: " + NumToStr(n,0)`), or a condition (`WaitUntil di1 = 1 AND NOT
+bStop`). Anything else in a statement — a comment inside it, another keyword, a named
+or conditional argument, calls nested deeper — ends the run, and that statement is
+parsed by the full grammar as before.
 
-Four more terminals take the head of a compound statement whole: `IF cond THEN`,
-`ELSEIF cond THEN`, `WHILE cond DO` (FAST_IF, FAST_ELSEIF, FAST_WHILE) and
-`RETURN [value];` (FAST_RETURN). Their patterns only find where the condition ends
-(the fewest characters up to the keyword, no comment, `;`, conditional or named
-argument or placeholder inside); fast_expressions' reader then reads the condition as
-rapid.lark's `expr` (relations, NOT, AND, OR, XOR), or gives up (NotFast).
+More terminals take the head of a compound statement whole (head_patterns):
+`IF c THEN`, `ELSEIF c THEN`, `WHILE c DO`, `FOR v FROM a TO b [STEP s] DO`, `TEST e`,
+`CASE a, b:` and `RETURN [e];`. Their patterns only find where each condition ends (the
+fewest characters up to the next keyword, no comment, `;`, conditional or named argument
+or placeholder inside); fast_expressions' reader then reads it as rapid.lark's `expr`
+(relations, NOT, AND, OR, XOR), or gives up (NotFast).
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
