@@ -214,16 +214,22 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     }
 
 
-# The statements whose head is one fast token, and the rule each is an alternative of
-# (rule: its head token, then what follows the plain head in rapid.lark).
+# The statements whose head is one fast token: the rule each is an alternative of
+# (its head token, then what follows the plain head in rapid.lark), and the plain rule
+# (checked against rapid.lark).
 _HEAD_RULES = {
-    "if": ("fast_if_stmt", "_statement* elseif_clause* else_clause? ENDIF"),
-    "elseif": ("elseif_clause", "_statement* -> fast_elseif_clause"),
-    "while": ("fast_while_stmt", "_statement* ENDWHILE"),
-    "for": ("fast_for_stmt", "_statement* ENDFOR"),
-    "test": ("fast_test_stmt", "(case_clause | case_placeholder)* default_clause? ENDTEST"),
-    "case": ("case_clause", "_statement* -> fast_case_clause"),
-    "return": ("return_stmt", "-> fast_return_stmt"),
+    "if": ("fast_if_stmt", "_statement* elseif_clause* else_clause? ENDIF",
+           "if_stmt: IF expr THEN"),
+    "elseif": ("elseif_clause", "_statement* -> fast_elseif_clause",
+               "elseif_clause: ELSEIF expr THEN"),
+    "while": ("fast_while_stmt", "_statement* ENDWHILE", "while_stmt: WHILE expr DO"),
+    "for": ("fast_for_stmt", "_statement* ENDFOR",
+            "for_stmt: FOR NAME FROM expr TO expr (STEP expr)? DO"),
+    "test": ("fast_test_stmt", "(case_clause | case_placeholder)* default_clause? ENDTEST",
+             "test_stmt: TEST expr"),
+    "case": ("case_clause", "_statement* -> fast_case_clause",
+             'case_clause: CASE expr ("," expr)* ":"'),
+    "return": ("return_stmt", "-> fast_return_stmt", "return_stmt: RETURN expr? SEMI"),
 }
 _BODY_RULE = "_body: (data_decl | _statement)*"
 #: statements in one fast token at most. Python's regular expression engine keeps a
@@ -248,7 +254,10 @@ def grammar_extension(grammar: str) -> str:
     heads = {kind: p[kind] for kind in _HEAD_RULES}
     if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
         raise ValueError("a terminal pattern holds '/'")  # a Lark regex literal ends at '/'
-    new_rules = [rule for rule, _ in _HEAD_RULES.values() if rule.startswith("fast_")]
+    for _, rest, plain in _HEAD_RULES.values():
+        if f"{plain} {rest.split('->')[0]}".rstrip() not in grammar:  # pragma: no cover
+            raise ValueError(f"rapid.lark no longer says {plain!r} ...; update fastpath")
+    new_rules = [rule for rule, _, _ in _HEAD_RULES.values() if rule.startswith("fast_")]
     return (
         f"\n%extend _statement: _fast_calls | {' | '.join(new_rules)}\n"
         "%extend _module_item: _fast_decls\n"
@@ -257,7 +266,7 @@ def grammar_extension(grammar: str) -> str:
         "_fast_decls: FAST_DECLS\n"
         + "".join(f"{'' if rule.startswith('fast_') else '%extend '}{rule}: "
                   f"FAST_{kind.upper()} {rest}\n"
-                  for kind, (rule, rest) in _HEAD_RULES.items())
+                  for kind, (rule, rest, _) in _HEAD_RULES.items())
         + f"FAST_CALLS.9: /{calls}/\n"
         f"FAST_DECLS.9: /{decls}/\n"
         + "".join(f"FAST_{kind.upper()}.9: /{pattern}/\n" for kind, pattern in heads.items())
@@ -841,10 +850,7 @@ class FastSyntaxBuilder(SyntaxBuilder):
 
     def fast_test_stmt(self, head: Token, *rest: Any) -> s.Test:
         (subject,) = _head_parts(head, "test")
-        cases = [item[1:] for item in rest if isinstance(item, tuple) and item[0] == "case"]
-        default = next((item[1] for item in rest if isinstance(item, tuple)
-                        and item[0] == "default"), None)
-        return s.Test(head.start_pos, rest[-1].end_pos, subject, cases, default)
+        return self.test_clauses(head.start_pos, subject, rest)
 
     def fast_case_clause(self, head: Token, *body: Any) -> tuple:
         (values,) = _head_parts(head, "case")

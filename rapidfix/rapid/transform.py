@@ -201,10 +201,16 @@ class SyntaxBuilder(Transformer):
         return s.While(while_.start_pos, rest[-1].end_pos, cond, statements_in(rest))
 
     def test_stmt(self, test: Token, subject: s.Expr, *rest: Any) -> s.Test:
+        return self.test_clauses(test.start_pos, subject, rest)
+
+    @staticmethod
+    def test_clauses(start: int, subject: s.Expr, rest: tuple) -> s.Test:
+        """The Test node of a TEST at `start` of `subject`, from its CASE and DEFAULT
+        clauses and the ENDTEST token."""
         cases = [item[1:] for item in rest if isinstance(item, tuple) and item[0] == "case"]
         default = next((item[1] for item in rest if isinstance(item, tuple)
                         and item[0] == "default"), None)
-        return s.Test(test.start_pos, rest[-1].end_pos, subject, cases, default)
+        return s.Test(start, rest[-1].end_pos, subject, cases, default)
 
     def case_clause(self, _case: Token, *rest: Any) -> tuple:
         values = [x for x in rest if not isinstance(x, (s.Statement, Token))]
