@@ -17,8 +17,9 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -313,7 +314,8 @@ def _run_parallel(jobs: list[tuple[str, str, str, BatchSettings]], workers: int,
     def submit_next() -> None:
         job = next(pending, None)
         if job is not None:
-            running[pool.submit(_job, job)] = job
+            with _stop_signals_held():  # the submit may fork a worker
+                running[pool.submit(_job, job)] = job
 
     try:
         for _ in range(workers):
@@ -346,11 +348,33 @@ def _stop(pool: ProcessPoolExecutor) -> None:
         process.join(timeout=5)
 
 
+_STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextmanager
+def _stop_signals_held() -> Iterator[None]:
+    """Hold back Ctrl-C and SIGTERM while a worker may be forked. A worker between its
+    fork and `_worker_init` has the main process's handlers: Ctrl-C to the process group
+    then raised KeyboardInterrupt inside Python's own after-fork hooks, which printed
+    a traceback. The worker lets the signals through once its own handlers are set;
+    the main process gets them as the block ends."""
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - not POSIX
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 def _worker_init() -> None:
     """A worker leaves Ctrl-C to the main process (which stops it) and, on SIGTERM,
     removes the temporary file of the write in progress before it exits."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, exit_on_sigterm)
+    if hasattr(signal, "pthread_sigmask"):  # held back while it was forked
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
     parent = os.getppid()
 
     def watch() -> None:  # the main process was killed (SIGKILL): stop too

@@ -182,3 +182,35 @@ def test_a_move_after_a_call_keeps_the_start_reason(cell, tmp_path, capsys):
     assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o",
                  str(tmp_path / "o.mod")]) == 0
     assert "(start not known before run time)" in capsys.readouterr().out
+
+
+def _worker_signals() -> tuple[bool, object]:
+    """In a batch worker: whether Ctrl-C or SIGTERM is held back, and Ctrl-C's handler."""
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    return bool({signal.SIGINT, signal.SIGTERM} & held), signal.getsignal(signal.SIGINT)
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
+def test_workers_are_forked_with_ctrl_c_held_back_and_take_it_once_ready(monkeypatch):
+    """Ctrl-C to the process group while a batch worker was being forked raised
+    KeyboardInterrupt inside Python's after-fork hooks in the child (a traceback in a CI
+    run). The batch now forks with SIGINT and SIGTERM held back; a worker lets them
+    through once it ignores Ctrl-C, and the main process gets them after the fork."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from rapidfix.postprocess import batch
+
+    held_at_submit: list[bool] = []
+    submit = ProcessPoolExecutor.submit
+
+    def probe(self, fn, *args):  # run the probe in place of each file's job
+        held_at_submit.append(signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))
+        return submit(self, _worker_signals)
+
+    monkeypatch.setattr(ProcessPoolExecutor, "submit", probe)
+    results: list[tuple[bool, object]] = []
+    jobs = [("a", "b", f"f{k}", None) for k in range(3)]
+    batch._run_parallel(jobs, 2, results, None, None)
+    assert held_at_submit == [True, True, True]
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])  # let go after
+    assert results == [(False, signal.SIG_IGN)] * 3
