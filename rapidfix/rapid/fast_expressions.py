@@ -427,36 +427,40 @@ def _depth(node: s.Node) -> int:
     return deepest
 
 
+def _read_whole(text: str, start: int, read: Callable[[_Reader], list[s.Expr]]
+                ) -> list[s.Expr]:
+    """What `read` takes from the whole of `text` standing at `start`; NotRead when it
+    leaves text over, or the nodes nest deeper than DEEPEST (or than Python's stack)."""
+    reader = _Reader(text, start)
+    try:
+        nodes = read(reader)
+    except RecursionError:  # nested deeper than Python's stack: the grammar's to read
+        raise NotRead(text) from None
+    if reader._skip() or (len(text) > _DEEP_TEXT and max(map(_depth, nodes)) > DEEPEST):
+        raise NotRead(text)
+    return nodes
+
+
+def _conditions(reader: _Reader) -> list[s.Expr]:
+    items = [reader.condition()]
+    while reader._skip() == ",":
+        reader.pos += 1
+        items.append(reader.condition())
+    return items
+
+
 def read_list(text: str, start: int) -> list[s.Expr]:
     """The conditions of a comma-separated list (a CASE's values) standing at `start`;
     NotRead as read_expression."""
-    reader = _Reader(text, start)
-    items = []
-    try:
-        items.append(reader.condition())
-        while reader._skip() == ",":
-            reader.pos += 1
-            items.append(reader.condition())
-    except RecursionError:
-        raise NotRead(text) from None
-    if reader._skip() or (len(text) > _DEEP_TEXT and max(map(_depth, items)) > DEEPEST):
-        raise NotRead(text)
-    return items
+    return _read_whole(text, start, _conditions)
 
 
 def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
     """The node rapid.lark builds for the value `text` standing at offset `start` (a sum,
     or with `condition` any `expr`: relations, NOT, AND, OR, XOR); NotRead when it is
     not such a value, exactly and whole, or nests deeper than DEEPEST."""
-    reader = _Reader(text, start)
-    try:
-        node = reader.condition() if condition else reader.expression()
-    except RecursionError:  # nested deeper than Python's stack: the grammar's to read
-        raise NotRead(text) from None
-    if reader._skip():
-        raise NotRead(text)
-    if len(text) > _DEEP_TEXT and _depth(node) > DEEPEST:
-        raise NotRead(text)
+    (node,) = _read_whole(text, start, lambda reader: [
+        reader.condition() if condition else reader.expression()])
     return node
 
 
