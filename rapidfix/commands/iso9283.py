@@ -48,7 +48,7 @@ def iso_figures(results: dict[str, dict[str, Any]]) -> Any:
     """AP and RP per pose, each run and frame side by side (bar chart)."""
     from matplotlib.figure import Figure as MplFigure
 
-    from rapidfix.report import Figure, png_bytes
+    from rapidfix.report import Figure
 
     fig = MplFigure(figsize=(10, 4), layout="constrained")
     axes = fig.subplots(1, 2)
@@ -68,7 +68,7 @@ def iso_figures(results: dict[str, dict[str, Any]]) -> Any:
     return Figure("iso9283", "ISO 9283 pose accuracy and repeatability",
                   "Per pose of the cube: AP (distance from the commanded position to the "
                   "barycentre of the attained ones) and RP (l̄ + 3·S_l), ISO 9283:1998 7.2.",
-                  data, png_bytes(fig))
+                  data, fig)
 
 
 def run(args: argparse.Namespace) -> int:

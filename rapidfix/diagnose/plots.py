@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure as MplFigure
 
-from rapidfix.report import AFTER_COLOUR, BEFORE_COLOUR, Figure, finite_list, png_bytes
+from rapidfix.report import AFTER_COLOUR, BEFORE_COLOUR, Figure, finite_list
 
 
 def evidence_figure(kind: str, feature: np.ndarray, label: str, residual_mm: np.ndarray,
@@ -44,5 +44,5 @@ def evidence_figure(kind: str, feature: np.ndarray, label: str, residual_mm: np.
         {"feature_label": label, "feature": finite_list(x),
          "residual_before_mm": finite_list(residual_mm),
          "correction_mm": finite_list(predicted_mm), "residual_after_mm": finite_list(after_mm)},
-        png_bytes(fig),
+        fig,
     )

@@ -133,6 +133,12 @@ def fit_free_effects(model: ErrorModel, robot: object, data: MeasuredPoints, *,
     The uncertainties (also written to each effect's `uncertainty`) are the
     Gauss–Newton covariance scaled by the residual variance per coordinate.
     """
+    with model.fixed_effects_held(data.q, data.ctx):
+        return _fit(model, robot, data, max_iter, rcond)
+
+
+def _fit(model: ErrorModel, robot: object, data: MeasuredPoints, max_iter: int,
+         rcond: float) -> EffectsFit:
     p = model.free_params()
     if p.size == 0:
         r = predict(model, robot, data) - data.xyz

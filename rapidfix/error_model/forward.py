@@ -33,11 +33,12 @@ def flange_poses(
     home = _per_pose(geometry.home, n, (4, 4))
     current = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
     jac = np.empty((n, 6, 6)) if with_jacobian else None
+    exps = revolute_exp(dirs, points, q[:, :6])  # (N, 6, 4, 4), all joints in one batch
     for i in range(6):  # the six joints; every step is vectorised over poses
         if jac is not None:
             w = np.einsum("nij,nj->ni", current[:, :3, :3], dirs[:, i])
             p = np.einsum("nij,nj->ni", current[:, :3, :3], points[:, i]) + current[:, :3, 3]
             jac[:, :3, i] = w
             jac[:, 3:, i] = -np.cross(w, p)
-        current = current @ revolute_exp(dirs[:, i], points[:, i], q[:, i])
+        current = current @ exps[:, i]
     return current @ home, jac

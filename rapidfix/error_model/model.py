@@ -14,6 +14,8 @@ command-line boundary.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,6 +62,10 @@ class ErrorModel:
     statistics: dict[str, Any] = field(default_factory=dict)
     data_files: list[dict[str, str]] = field(default_factory=list)
     robot_definition: dict[str, Any] | None = None
+    #: while a fit holds them (`fixed_effects_held`): the joints, the context and the
+    #: joint errors of the effects it may not change, computed once for them
+    _held: tuple[np.ndarray, Context, dict[tuple[str, int], np.ndarray]] | None = field(
+        default=None, init=False, repr=False, compare=False)
 
     # -- structure ----------------------------------------------------------------
     def effect(self, name: str) -> Effect:
@@ -164,10 +170,36 @@ class ErrorModel:
         q = _joints(q_cmd)
         ctx = EMPTY if ctx is None else ctx
         out = np.zeros_like(q)
-        for eff in self.effects:
-            if eff.adds_joint_delta:
+        held = self._held
+        if held is not None and (held[0] is not q or held[1] is not ctx):
+            held = None
+        for k, eff in enumerate(self.effects):
+            if not eff.adds_joint_delta:
+                continue
+            if held is None or eff.free:
                 out += getattr(eff, term)(q, ctx)
+                continue
+            value = held[2].get((term, k))
+            if value is None:
+                value = held[2][(term, k)] = getattr(eff, term)(q, ctx)
+            out += value
         return out
+
+    @contextmanager
+    def fixed_effects_held(self, q_cmd: np.ndarray, ctx: Context) -> Iterator[None]:
+        """Inside the block, the joint errors of the effects that are not free are computed
+        once for these very joints and context (the same arrays, by identity) and reused.
+
+        A fitter evaluates the model dozens of times at the same points, changing only
+        the free effects; the fixed ones (the per-joint networks) need not be evaluated
+        again each time. The sum keeps its order: the same numbers to the last bit.
+        """
+        previous = self._held
+        self._held = (q_cmd, ctx, {})
+        try:
+            yield
+        finally:
+            self._held = previous
 
     def geometry(self, robot: RobotModel, q_cmd: np.ndarray,
                  ctx: Context | None = None) -> Geometry:

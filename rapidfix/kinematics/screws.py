@@ -153,15 +153,18 @@ def _chain(
 ) -> np.ndarray:
     """e^[S1]θ1 … e^[Sn]θn (K, 4, 4) for one chunk, storing the prefixes (or only the
     current axis directions and points) when asked."""
+    n = axis_dirs.shape[0]
+    # every joint's exponential in one batch (K, n, 4, 4), then their product joint by joint
+    exps = revolute_exp(axis_dirs, axis_points, q[:, :n])
     current = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
-    for i in range(axis_dirs.shape[0]):  # loop over the joints, not over poses
+    for i in range(n):  # loop over the joints, not over poses
         if prefix is not None:
             prefix[:, i] = current
         if axes is not None:
             rot = current[:, :3, :3]
             axes[0][:, i] = rot @ axis_dirs[i]
             axes[1][:, i] = rot @ axis_points[i] + current[:, :3, 3]
-        current = current @ revolute_exp(axis_dirs[i], axis_points[i], q[:, i])
+        current = current @ exps[:, i]
     return current
 
 

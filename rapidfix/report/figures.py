@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import io
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -23,13 +24,22 @@ AFTER_COLOUR = "#1f77b4"
 
 @dataclass(frozen=True)
 class Figure:
-    """One report figure: a file-safe name, a title, a caption, its data and its PNG bytes."""
+    """One report figure: a file-safe name, a title, a caption, its data and its drawing.
+
+    The PNG is rendered when first read (`png`): a diagnosis run through the API, or a
+    report never written, does not pay for drawing (about 0.4 s a figure).
+    """
 
     name: str
     title: str
     caption: str
     data: dict[str, Any]
-    png: bytes
+    drawing: MplFigure = field(repr=False, compare=False)
+
+    @cached_property
+    def png(self) -> bytes:
+        """The drawing as PNG bytes (rendered once)."""
+        return png_bytes(self.drawing)
 
 
 def png_bytes(fig: MplFigure) -> bytes:
@@ -90,7 +100,7 @@ def joint_error_figure(joints: Sequence[dict[str, np.ndarray] | None]) -> Figure
         "deviation) and the fitted Gaussian RBF network over its valid range. Grey: "
         "stretches of the range without measurements, where the network only interpolates.",
         data,
-        png_bytes(fig),
+        fig,
     )
 
 
@@ -130,7 +140,7 @@ def position_error_figure(before: np.ndarray, after: np.ndarray) -> Figure:
             "before_norm_mm": finite_list(nb),
             "after_norm_mm": finite_list(na),
         },
-        png_bytes(fig),
+        fig,
     )
 
 
@@ -163,5 +173,5 @@ def ballbar_figure(
         "each discrete point of the semicircle in the plane inclined 45°.",
         {"angle_deg": finite_list(angle_deg), "before_mm": finite_list(before_mm),
          "after_mm": finite_list(after_mm)},
-        png_bytes(fig),
+        fig,
     )

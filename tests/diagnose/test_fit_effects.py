@@ -65,3 +65,57 @@ def test_noise_gives_honest_uncertainties_and_duplicates_count_once():
     std = model.effects[1].uncertainty
     assert np.all(np.abs(err) < 5 * np.hypot(std, model.effects[2].uncertainty))
     assert 0.7 * sigma < np.sqrt(fit.rss / (fit.n_obs - fit.rank)) < 1.3 * sigma
+
+
+
+def _counted_fixed_compliance(calls):
+    """A fixed compliance effect whose evaluations are counted in `calls`."""
+    fixed = JointCompliance(ROBOT.name, BALL, free=False)
+    fixed.set_fitted(np.array([2e-6, -1e-6, 3e-4, 1e-4, -5e-5, 2e-4]))
+    plain = fixed.joint_delta
+
+    def joint_delta(q, ctx):
+        calls.append(1)
+        return plain(q, ctx)
+
+    fixed.joint_delta = joint_delta
+    return fixed
+
+
+def test_fixed_effects_are_evaluated_once_per_fit_and_the_fit_is_unchanged():
+    """A fit holds the fixed effects' joint errors for its own points: the same numbers as
+    evaluating them every time (the fitter's inner routine, unheld), far fewer calls."""
+    from rapidfix.error_model.fit_effects import _fit
+
+    q, ctx = _data(50, seed=3)
+    truth = _truth()
+    xyz = truth.predict_ball(ROBOT, q, BALL, ctx, frame="world") + 0.01
+    fits, calls = [], []
+    for held in (False, True):
+        model = _truth()
+        counted = []
+        model.effects.append(_counted_fixed_compliance(counted))
+        data = MeasuredPoints(q, xyz, ctx, BALL)
+        fits.append(fit_free_effects(model, ROBOT, data) if held
+                    else _fit(model, ROBOT, data, 25, 1e-7))
+        calls.append(len(counted))
+        assert model._held is None  # released after the fit
+    np.testing.assert_array_equal(fits[0].params, fits[1].params)
+    np.testing.assert_array_equal(fits[0].residuals, fits[1].residuals)
+    assert calls[1] == 1 < calls[0]
+
+
+def test_a_held_model_computes_other_joints_afresh():
+    """Inside the hold, other joints (or another context) are not served the held values."""
+    q, ctx = _data(20, seed=4)
+    model = _truth()
+    counted = []
+    model.effects.append(_counted_fixed_compliance(counted))
+    unheld = ErrorModel(ROBOT.name, model.effects)
+    other, other_ctx = _data(20, seed=5)
+    with model.fixed_effects_held(q, ctx):
+        np.testing.assert_array_equal(model.delta(q, ctx), unheld.delta(q, ctx))
+        np.testing.assert_array_equal(model.delta(other, other_ctx),
+                                      unheld.delta(other, other_ctx))
+        np.testing.assert_array_equal(model.delta(q.copy(), ctx), unheld.delta(q, ctx))
+    assert len(counted) == 6  # held once; the other joints and the copy computed afresh

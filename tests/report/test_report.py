@@ -79,3 +79,19 @@ def test_report_html_embeds_every_figure_and_json_carries_the_data(tmp_path):
     assert len(doc["figures"]["validation_errors"]["data"]["before_xyz_mm"]) == 40
     rows = {t["title"].split(" ")[0]: t for t in doc["tables"]}
     assert rows["TCP"]["rows"][0][1] == pytest.approx(val["before"]["mean_mm"])
+
+
+def test_figures_are_drawn_when_first_read_and_once(monkeypatch):
+    """Building a report draws nothing (a diagnosis through the API never pays for it);
+    reading a figure's PNG draws it once."""
+    from rapidfix.report import figures
+
+    drawn = []
+    plain = figures.png_bytes
+    monkeypatch.setattr(figures, "png_bytes", lambda fig: drawn.append(fig) or plain(fig))
+    report = _report()
+    assert drawn == []
+    first = report.figures[0]
+    assert first.png.startswith(b"\x89PNG\r\n\x1a\n")
+    assert first.png is first.png
+    assert drawn == [first.drawing]
