@@ -68,7 +68,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 #: and errors (message and hint) are printed through `in_cli_words`.
 FLAGS = {
     "RewriteOptions.emit": "--emit",
-    "RewriteOptions(emit='robtargets')": "--emit robtargets",
     "RewriteOptions.path_tolerance_mm": "--path-tolerance",
     "RewriteOptions(strict=True)": "--strict",
     "RewriteOptions(force=True)": "--force",

@@ -81,9 +81,10 @@ def plan_program(program: Program, comp: Compensator, emit: str, *,
         if site.reason is None:
             label = operand_label(site.targets, t.operand[row])
             site.reason = label + solved.reason[row]
-    # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered'
+    # emission mode of each compensated site: 'joint' (MoveAbsJ) or 'filtered' (its own
+    # instruction kept: robtargets emitted, or no MoveAbsJ can stand for it)
     joint_kinds = "LJC" if emit == "jointtargets" else ""
-    mode = {i: "joint" if site.kind in joint_kinds else "filtered"
+    mode = {i: "joint" if site.kind in joint_kinds and site.kept is None else "filtered"
             for i, site in enumerate(sites) if site.reason is None}
     return ProgramPlan(sites, targets, conditions, solved, mode, approach_dir, margin)
 

@@ -32,7 +32,7 @@ from rapidfix.postprocess.path import (
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.plan import Plan, compensate_joints, plan_nearest
 from rapidfix.postprocess.planning import ProgramPlan
-from rapidfix.rapid import MotionInstruction, Program
+from rapidfix.rapid import STOPS_SHORT, MotionInstruction, Program
 
 #: why a MoveL/MoveC kept its instruction when its start is not known
 START_UNKNOWN = "start not known before run time"
@@ -142,6 +142,8 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     if emit != "jointtargets":
         return PathRefinement(planned.solved, mode, filtered_reason, [])
     sites, motions = planned.sites, program.motions
+    filtered_reason.update((i, sites[i].kept) for i, m in mode.items()
+                           if m == "filtered" and sites[i].kept is not None)
     n = len(sites)
     t, p = planned.targets, planned.solved
     site_motion = planned.conditions.site_motion
@@ -162,9 +164,13 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     moves = np.flatnonzero(joint & ((kind == "L") | (kind == "C")))
     previous = planned.conditions.predecessors()[site_motion[moves]]
     after = site_of_motion[previous]  # the site of the motion before, or -1
-    # a move after another compensated site starts where that one ends; one after an
-    # instruction that is not a site (a MoveAbsJ) may start at its joints
-    keep = (after >= 0) & compensated[np.maximum(after, 0)]
+    # a move after another compensated site starts where that one ends (unless it may
+    # stop short: a search); one after an instruction that is not a site (a MoveAbsJ)
+    # may start at its joints
+    ends_there = compensated.copy()
+    others = np.flatnonzero(kind == "X").tolist()  # few: a search is one of them
+    ends_there[[i for i in others if sites[i].motion.name.lower() in STOPS_SHORT]] = False
+    keep = (after >= 0) & ends_there[np.maximum(after, 0)]
     start_rows = np.where(keep, last_row[np.maximum(after, 0)], -1)
     starts: dict[int, np.ndarray] = {}  # site -> the joints of the MoveAbsJ it follows
     for k in np.flatnonzero(after < 0).tolist():

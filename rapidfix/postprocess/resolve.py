@@ -34,7 +34,8 @@ class Site:
     `kind` 'L', 'J', 'C' (linear, joint, circular path) or 'X' (another instruction,
     kept, only its robtargets filtered); `rows` its target rows (CirPoint first);
     `reason` why it is left as it was (None when it is compensated); `index` the
-    motion's place in `Program.motions`.
+    motion's place in `Program.motions`; `kept` why, when joint targets are emitted, it
+    keeps its instruction with a filtered robtarget (no MoveAbsJ can stand for it).
     """
 
     motion: MotionInstruction
@@ -43,6 +44,7 @@ class Site:
     rows: list[int] = field(default_factory=list)
     reason: str | None = None
     index: int = -1
+    kept: str | None = None
 
     @property
     def where(self) -> str:
@@ -164,17 +166,15 @@ def operand_label(operands: list[Operand], operand: Operand) -> str:
 
 
 def _instruction_kind(motion: MotionInstruction, emit: str) -> tuple[bool, str, str | None]:
-    """(moves to robtargets, site kind, why it is kept) for an instruction name,
-    whatever its optional arguments."""
+    """(moves to robtargets, site kind, why it keeps its instruction with a filtered
+    robtarget when joint targets are emitted) for an instruction name, whatever its
+    optional arguments."""
     if motion.target_kind != "robtarget":
         return False, "X", None
-    key = motion.name.lower()
-    if emit != "jointtargets":
-        return True, JOINT_FORM.get(key, "X"), None
-    kind = JOINT_FORM.get(key)
+    kind = JOINT_FORM.get(motion.name.lower())
     if kind is None:
-        return True, "X", (f"{motion.name} has no joint-target form "
-                            "(use RewriteOptions(emit='robtargets'))")
+        kept = f"{motion.name} has no joint-target form" if emit == "jointtargets" else None
+        return True, "X", kept
     return True, kind, None
 
 
@@ -283,7 +283,7 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         info = kinds.get(motion.name)
         if info is None:
             info = kinds[motion.name] = _instruction_kind(motion, emit)
-        moves_to_robtargets, kind, reason = info
+        moves_to_robtargets, kind, kept = info
         if not moves_to_robtargets:
             continue
         site_ops = motion.targets
@@ -296,11 +296,8 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
             around = [*_around_targets(motion), None]
             if shared is not None:
                 by_tail[shared] = around
-        if reason is None and joint:
-            reason = around[0]
-        if reason is not None:
-            sites.append(Site(motion, kind, site_ops, [], reason, index))
-            continue
+        if kept is None and joint:
+            kept = around[0]
         known = around[2]
         if known is None:
             known = frame_sets.get(around[1])
@@ -314,13 +311,13 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
                     and operand.type_name == "robtarget":
                 row = len(values)
                 row_site.append(len(sites))
-                sites.append(Site(motion, kind, site_ops, [row], None, index))
+                sites.append(Site(motion, kind, site_ops, [row], None, index, kept))
                 values.append(operand.value)  # the raw tuple, shape-checked by the RAPID layer
                 operands.append(operand)
                 row_set.append(set_index)
                 deferred = True
                 continue
-        site = Site(motion, kind, site_ops, [], None, index)
+        site = Site(motion, kind, site_ops, [], None, index, kept)
         sites.append(site)
         found = _site_values(site_ops, outside)
         if isinstance(found, str):

@@ -163,8 +163,8 @@ class RewriteResult:
             f", {len(self.skipped)} left as they were"
         )
         for reason, count in self.filtered_reasons.items():
-            lines.append(f"  {count} linear/circular moves kept their instruction "
-                         f"with a filtered robtarget ({reason})")
+            kept = "1 move kept its" if count == 1 else f"{count} moves kept their"
+            lines.append(f"  {kept} instruction with a filtered robtarget ({reason})")
         lines.extend(f"  {note}" for note in self.notes)
         if self.predicted_before_mm is not None:
             mean, worst = self.predicted_before_mm

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from rapidfix import lazy_exports
 from rapidfix.rapid.evaluate import NotConstant
-from rapidfix.rapid.instructions import MOTION_INSTRUCTIONS, MotionSpec, motion_spec
+from rapidfix.rapid.instructions import MOTION_INSTRUCTIONS, STOPS_SHORT, MotionSpec, motion_spec
 from rapidfix.rapid.parse import load_program, parse_program
 from rapidfix.rapid.program import (
     Declaration,
@@ -97,6 +97,7 @@ LAZY_EXPORTS = {
 
 __all__ = [
     "MOTION_INSTRUCTIONS",
+    "STOPS_SHORT",
     "SYSTEM_DATA",
     "Assignment",
     "Declaration",

@@ -77,6 +77,11 @@ WRITING_PROCEDURES: dict[str, tuple[int, ...]] = {
 }
 
 
+# Motion instructions that may stop short of their target: a search stops where its
+# signal changes, so where the robot is after one is known only at run time.
+STOPS_SHORT = frozenset({"searchl", "searchc", "searchextj"})
+
+
 # Procedures that take targets without moving the robot to them: a world zone's
 # joint limits, the recorded positions of a tool calibration, data read, written,
 # packed or sent (and every procedure of WRITING_PROCEDURES).

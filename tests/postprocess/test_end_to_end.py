@@ -175,3 +175,52 @@ def test_filtered_robtargets_land_on_the_targets(cell, comp, samples, tmp_path):
     err_before = np.linalg.norm(before - intended, axis=1).mean()
     err_after = np.linalg.norm(after - intended, axis=1).mean()
     assert err_after <= 0.2 * err_before
+
+
+#: instructions MoveAbsJ cannot stand for, each written as a program would (ToPoint pBBk)
+KEPT_FORMS = (
+    "ArcL {p}, v50, sm1, wd1, fine, tBallbar\\WObj:=wobjBallbar;",
+    "TriggL {p}, v50, gun, fine, tBallbar\\WObj:=wobjBallbar;",
+    "MoveLDO {p}, v50, fine, tBallbar\\WObj:=wobjBallbar, do1, 1;",
+    "MoveL {p}, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;",
+    "SearchL \\Stop, di1, pHit, {p}, v50, tBallbar\\WObj:=wobjBallbar;",
+    "MoveLSync {p}, v50, fine, tBallbar\\WObj:=wobjBallbar, \"Weld\";",
+)
+
+
+def test_instructions_without_a_joint_form_keep_it_and_land_on_their_targets(
+        cell, comp, samples, tmp_path):
+    """With joint targets emitted (the default), an instruction no MoveAbsJ can stand for
+    (arc welding, triggers, set-output moves, \\Corr, searches, synchronised moves) keeps
+    its instruction with a filtered robtarget: executed through the nominal IK on its
+    confdata, it lands on the intended target as the MoveAbsJ moves do."""
+    virtual, robot = cell["virtual"], cell["robot"]
+    text = (samples / "ballbar.mod").read_text()
+    names, tool_T, wobj_T, targets, conf = ballbar_setup(load_program(samples / "ballbar.mod"))
+    for k in range(1, len(names)):
+        line = f"MoveL pBB{k:02d}, v50, fine, tBallbar\\WObj:=wobjBallbar;"
+        text = text.replace(line, KEPT_FORMS[k % len(KEPT_FORMS)].format(p=f"pBB{k:02d}"), 1)
+    source = tmp_path / "kept.mod"
+    source.write_text(text)
+    result = rewrite_file(source, tmp_path / "kept.out.mod", comp, RewriteOptions())
+    assert result.skipped == [] and result.moves_compensated == result.moves_total == 21
+    kinds = {"ArcL", "TriggL", "MoveLDO", "SearchL", "MoveLSync"}
+    expected = {f"{name} has no joint-target form": 3 for name in kinds}
+    expected["optional argument \\Corr has no MoveAbsJ form"] = 3
+    assert result.filtered_reasons == expected
+    out = load_program(tmp_path / "kept.out.mod")
+    kept = [m for m in out.motions if m.name.lower() != "moveabsj"]
+    assert [m.name for m in kept] == [KEPT_FORMS[k % 6].split(" ")[0] for k in range(1, 19)]
+    d = decls(out)
+    written = [d[m.target.text.lower()].data for m in kept]
+    flange = (wobj_T @ np.array([frame(w.trans, w.rot) for w in written])) @ np.linalg.inv(tool_T)
+    q_after, status = robot.ik_conf(flange, np.array([w.robconf for w in written]))
+    q_before, status_before = robot.ik_conf(targets[1:] @ np.linalg.inv(tool_T), conf[1:])
+    assert np.all(status == 0) and np.all(status_before == 0)
+    intended = targets[1:, :3, 3]
+    before = align_about_z(true_tcp(virtual, q_before, tool_T), intended)
+    after = align_about_z(true_tcp(virtual, q_after, tool_T), intended)
+    err_before = np.linalg.norm(before - intended, axis=1).mean()
+    err_after = np.linalg.norm(after - intended, axis=1).mean()
+    assert err_before > 0.02
+    assert err_after <= 0.2 * err_before

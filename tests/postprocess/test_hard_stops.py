@@ -168,7 +168,7 @@ def test_a_kept_move_is_given_its_true_reason(cell, tmp_path, capsys):
     assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o",
                  str(tmp_path / "o.mod")]) == 0
     out = capsys.readouterr().out
-    assert "1 linear/circular moves kept their instruction" in out
+    assert "1 move kept its instruction with a filtered robtarget" in out
     assert "its arc is degenerate" in out and "start not known" not in out
 
 

@@ -159,13 +159,11 @@ def test_library_notes_hints_and_reasons_name_options_the_cli_names_flags(
     reasons = [skipped.reason for skipped in result.skipped]
     assert any(r.endswith("(pass the file that declares it with Compensator.load(decl_files))")
                for r in reasons)
-    assert "SearchL has no joint-target form (use RewriteOptions(emit='robtargets'))" in reasons
     prog = tmp_path / "station.mod"
     prog.write_text(station)
     assert main(["rewrite", str(prog), "--model", model, "-o", str(tmp_path / "s.mod")]) == 3
     err_text = capsys.readouterr().err
     assert "(pass the file that declares it with --decls)" in err_text
-    assert "SearchL has no joint-target form (use --emit robtargets)" in err_text
     assert "RewriteOptions" not in err_text and "Compensator" not in err_text
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -44,15 +46,23 @@ def test_optional_arguments_are_kept(comp, line, expected):
             assert ", z0, tBallbar" in statement
 
 
-def test_corr_has_no_joint_form(comp):
+def test_corr_has_no_joint_form_and_keeps_its_move_with_a_filtered_robtarget(comp):
+    """MoveAbsJ takes no \\Corr: the move stays a MoveL with \\Corr, to a filtered robtarget
+    (where it lands is tested on the virtual robot in test_end_to_end)."""
     text = ballbar_program().replace(
         "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar;",
         "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;",
         1,
     )
     result = rewrite_source(text.encode(), "corr.mod", comp, RewriteOptions())
-    assert len(result.skipped) == 1 and "\\Corr" in result.skipped[0].reason
-    assert "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;" in result.data.decode()
+    assert result.skipped == [] and result.moves_compensated == result.moves_total
+    assert result.filtered_reasons == {"optional argument \\Corr has no MoveAbsJ form": 1}
+    out = result.data.decode()
+    assert "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar\\Corr;" in out
+    declared = re.compile(r"CONST robtarget pBB01:=[^;]*;")
+    assert declared.search(out).group() != declared.search(text).group()  # filtered in place
+    assert ("  1 move kept its instruction with a filtered robtarget (optional argument \\Corr "
+            "has no MoveAbsJ form)") in result.report_lines()
 
 
 def test_crlf_and_cp1252_are_kept(comp):
@@ -78,3 +88,22 @@ def test_rewrite_is_deterministic_and_inputs_are_bytes_in_bytes_out(comp):
     kept = [line for line in lines if "rapidfix-compensated" not in line]
     assert "".join(kept).encode() == empty and result.worst_predicted_mm is None
     assert np.isclose(result.moves_total, 0)
+
+
+@pytest.mark.parametrize(("before", "after_search_known"), [
+    ("TriggL pBB04, v50, gun, fine, tBallbar\\WObj:=wobjBallbar;", True),
+    ("SearchL \\Stop, di1, pHit, pBB04, v50, tBallbar\\WObj:=wobjBallbar;", False),
+])
+def test_a_move_after_a_search_starts_where_the_search_stopped(comp, before, after_search_known):
+    """A kept instruction ends on its compensated target, so the MoveL after it becomes
+    MoveAbsJ from there; a search may stop short (its signal), so the MoveL after it
+    does not know its start and keeps its instruction with a filtered robtarget."""
+    text = ballbar_program().replace(
+        "MoveL pBB04, v50, fine, tBallbar\\WObj:=wobjBallbar;", before, 1)
+    result = rewrite_source(text.encode(), "search.mod", comp, RewriteOptions())
+    out = result.data.decode()
+    assert result.skipped == []
+    assert ("MoveAbsJ jt_pBB05," in out) is after_search_known
+    assert ("MoveL pBB05, v50, fine, tBallbar\\WObj:=wobjBallbar;" in out) is not after_search_known
+    assert result.filtered_reasons.get("start not known before run time", 0) == (
+        0 if after_search_known else 1)
