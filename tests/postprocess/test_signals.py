@@ -128,11 +128,11 @@ def test_interrupted_run_leaves_complete_output_or_nothing(cell, program_and_ref
     assert status in (0, EXPECTED_STATUS[sig], -sig), err
     if status == -sig and sig != signal.SIGKILL:
         assert all(out.exists() for out in outputs), err
-    assert "Traceback" not in err
+    assert "Traceback" not in err, err
     for out in outputs:  # complete under its real name, or nothing
-        assert not out.exists() or out.read_bytes() == reference
+        assert not out.exists() or out.read_bytes() == reference, (out, status, err)
     if sig != signal.SIGKILL:
-        assert _temporaries(out_dir) == []
+        assert _temporaries(out_dir) == [], (status, err)
     # the next run finishes the job and leaves no temporary file behind
     done = subprocess.run([*CLI, *args], capture_output=True, text=True, env=_env(),
                           timeout=300)
