@@ -30,6 +30,7 @@ from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.header import read_header
 from rapidfix.postprocess.rewrite import RewriteOptions, header_options, rewrite_file
+from rapidfix.postprocess.task_modules import task_neighbours, task_snapshot, with_task_modules
 
 RAPID_SUFFIXES = (".mod", ".modx", ".prg", ".sys")
 
@@ -177,12 +178,14 @@ def _from_summary(rel: str, summary: str) -> FileOutcome:
                        moves_skipped=counts[2], message=summary)
 
 
-def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) -> FileOutcome:
+def process_file(source: Path, target: Path, rel: str, settings: BatchSettings,
+                 task: tuple[tuple[str, str], ...] = ()) -> FileOutcome:
     """Rewrite or copy one file; every project error becomes an 'error' outcome and every
-    user warning (e.g. a joint clamped to the model's range) a 'warnings' outcome."""
+    user warning (e.g. a joint clamped to the model's range) a 'warnings' outcome.
+    `task`: the other modules of the file's controller task (see task_modules)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        outcome = _process_file(source, target, rel, settings)
+        outcome = _process_file(source, target, rel, settings, task)
     messages = list(dict.fromkeys(str(w.message) for w in caught
                                   if issubclass(w.category, UserWarning)))
     outcome.warnings.extend(m for m in messages if m not in outcome.warnings)
@@ -193,8 +196,8 @@ def process_file(source: Path, target: Path, rel: str, settings: BatchSettings) 
     return outcome
 
 
-def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
-                  ) -> FileOutcome:
+def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings,
+                  task: tuple[tuple[str, str], ...]) -> FileOutcome:
     """The work of `process_file`."""
     try:
         if not is_rapid(source):
@@ -202,7 +205,7 @@ def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
             if not (target.exists() and target.read_bytes() == data):
                 write_bytes_atomic(target, data)
             return FileOutcome(rel, "copied")
-        comp = _compensator(settings)
+        comp = with_task_modules(_compensator(settings), task)
         for effect in comp.model.effects:  # each file warns for itself
             getattr(effect, "reset_warnings", lambda: None)()
         if settings.in_place and not settings.options.force:
@@ -238,10 +241,13 @@ def _process_file(source: Path, target: Path, rel: str, settings: BatchSettings
         return FileOutcome(rel, "error", message=f"{err.filename or rel}: {err.strerror or err}")
 
 
-def _job(args: tuple[str, str, str, BatchSettings]) -> FileOutcome:
-    source, target, rel, settings = args
+_Job = tuple[str, str, str, BatchSettings, tuple[tuple[str, str], ...]]
+
+
+def _job(args: _Job) -> FileOutcome:
+    source, target, rel, settings, task = args
     try:
-        return process_file(Path(source), Path(target), rel, settings)
+        return process_file(Path(source), Path(target), rel, settings, task)
     except Exception as err:  # a bug must not stop the other files; report it with the file
         return FileOutcome(rel, "error", message=f"internal error: {err!r}")
 
@@ -276,11 +282,21 @@ def run_batch(
     files = discover(src_root)
     if settings.in_place:
         files = [f for f in files if is_rapid(f)]
-    jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings) for f in files]
-    # largest files first, so no worker is left with a big one at the end
-    jobs.sort(key=lambda job: -_size(Path(job[0])))
     # fail early, once, on a bad model or robot instead of once per file
     _compensator(settings)
+    neighbours = task_neighbours([f for f in files if is_rapid(f)])
+    with task_snapshot(src_root, neighbours, settings.in_place) as read_from:
+        jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings,
+                 tuple((str(src_root / n), read_from(n)) for n in neighbours.get(f, ())))
+                for f in files]
+        return _run_jobs(jobs, settings, workers, progress, on_result)
+
+
+def _run_jobs(jobs: list[_Job], settings: BatchSettings, workers: int | None, progress: bool,
+              on_result: Callable[[FileOutcome], None] | None) -> BatchSummary:
+    """Run the batch's jobs (in parallel when there are several workers)."""
+    # largest files first, so no worker is left with a big one at the end
+    jobs.sort(key=lambda job: -_size(Path(job[0])))
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
     outcomes: list[FileOutcome] = []
     bar = _progress(len(jobs), progress)
@@ -298,7 +314,7 @@ def run_batch(
     return BatchSummary(outcomes)
 
 
-def _run_parallel(jobs: list[tuple[str, str, str, BatchSettings]], workers: int,
+def _run_parallel(jobs: list[_Job], workers: int,
                   outcomes: list[FileOutcome], bar: Any,
                   on_result: Callable[[FileOutcome], None] | None) -> None:
     """Run the jobs on a process pool, at most one per worker at a time.

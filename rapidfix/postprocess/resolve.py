@@ -87,21 +87,59 @@ class Targets:
 
 
 class Declarations:
-    """Data declared outside the program (Compensator.load(decl_files)), by lower-case name."""
+    """Data declared outside the program (Compensator.load(decl_files)), by lower-case name.
+
+    The program sees another module's data as the controller does: module-level
+    declarations that are not LOCAL. A name two of those modules declare is ambiguous
+    (the controller refuses to load such a task) and is used from neither.
+    """
 
     def __init__(self, programs: list[Program]) -> None:
         self._by_name: dict[str, Declaration] = {}
+        self._hidden: dict[str, str] = {}  # name -> why a declaration of it is not used
         for program in programs:
             for decl in program.declarations:
-                if decl.routine is None and decl.static and decl.value is not None:
-                    self._by_name.setdefault(decl.key, decl)
+                if decl.routine is not None:
+                    continue
+                key = decl.key
+                where = f"{decl.name} in module {decl.module} of {decl.source.filename}"
+                if decl.local:
+                    self._hidden.setdefault(key, f"{where} is LOCAL to that module")
+                    continue
+                first = self._by_name.get(key)
+                if first is not None:
+                    self._hidden[key] = (f"{decl.name} is declared in module {first.module} "
+                                         f"of {first.source.filename} and in module "
+                                         f"{decl.module} of {decl.source.filename}")
+                    continue
+                self._by_name[key] = decl
+        for key in self._hidden:
+            if key in self._by_name and "is declared in module" in self._hidden[key]:
+                del self._by_name[key]
 
     def get(self, name: str, type_name: str) -> Any:
         """Typed value of a declaration of this type, or None."""
         decl = self._by_name.get(name.lower())
-        if decl is None or decl.type_key != type_name:
+        if decl is None or decl.type_key != type_name or not decl.static:
             return None
         return decl.data
+
+    def why_not(self, name: str, type_name: str) -> str | None:
+        """Why `get` gave nothing for a name the declaration files do mention, or None
+        when they do not mention it."""
+        key = name.lower()
+        hidden = self._hidden.get(key)
+        if hidden is not None and key not in self._by_name:
+            return hidden
+        decl = self._by_name.get(key)
+        if decl is None:
+            return None
+        where = f"{decl.name} in {decl.source.filename}"
+        if decl.type_key != type_name:
+            return f"{where} is a {decl.type_name}, not a {type_name}"
+        if not decl.static or decl.value is None:
+            return f"{where}: {decl.reason or 'its value is not known before run time'}"
+        return f"{where}: its value is not a {type_name}"
 
 
 def operand_data(operand: Operand | None, type_name: str, outside: Declarations) -> tuple[Any, str]:
@@ -116,6 +154,9 @@ def operand_data(operand: Operand | None, type_name: str, outside: Declarations)
         data = outside.get(operand.name, type_name)
         if data is not None:
             return data, ""
+        why = outside.why_not(operand.name, type_name)
+        if why is not None:
+            return None, why
     reason = operand.reason or "not known before run time"
     if _UNDECLARED in reason:
         reason += " (pass the file that declares it with Compensator.load(decl_files))"

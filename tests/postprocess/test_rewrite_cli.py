@@ -93,6 +93,38 @@ def test_warnings_exit_three_and_strict_writes_nothing(cell, tmp_path, capsys):
     assert "MoveAbsJ jt_pA, v100, fine, tBar\\WObj:=wPlate;" in out.read_text()
 
 
+@pytest.mark.parametrize(("files", "reason"), [
+    ({"a.sys": DECLS.replace("PERS tooldata", "LOCAL PERS tooldata")},
+     "tBar in module BaseData of {a} is LOCAL to that module"),
+    ({"a.sys": DECLS, "b.sys": DECLS.replace("BaseData", "Other").replace("1.2,", "3.5,")},
+     "tBar is declared in module BaseData of {a} and in module Other of {b}"),
+    ({"a.sys": DECLS.replace("PERS tooldata tBar", "PERS num tBar:=1;\n  PERS tooldata tX")},
+     "tBar in {a} is a num, not a tooldata"),
+    ({"a.sys": DECLS.replace("PERS tooldata tBar:=", "VAR tooldata tBar;\n  PERS tooldata tY:=")
+      + "MODULE Setter\n  PROC s()\n    tBar := tool0;\n  ENDPROC\nENDMODULE\n"},
+     "tBar in {a}: "),
+])
+def test_declaration_files_are_seen_as_the_controller_sees_other_modules(
+        cell, tmp_path, capsys, files, reason):
+    """Data of another module is visible when it is declared at module level and not
+    LOCAL; a name two modules declare is ambiguous (the controller refuses to load such
+    a task) and is taken from neither; each is named with the file it comes from."""
+    prog = tmp_path / "station.mod"
+    prog.write_text(USES_OUTSIDE_DATA.replace("EXTAX", EXTAX))
+    args = ["rewrite", str(prog), "--model", str(cell["model_path"]),
+            "-o", str(tmp_path / "out.mod")]
+    paths = {}
+    for name, text in files.items():
+        paths[name] = tmp_path / name
+        paths[name].write_text(text)
+        args += ["--decls", str(paths[name])]
+    assert main(args) == 3
+    err = capsys.readouterr().err
+    expected = reason.format(**{k.split(".")[0]: str(v) for k, v in paths.items()})
+    assert f"{prog}:4: MoveJ pA: tool tBar: {expected}" in err, err
+    assert "pass the file" not in err
+
+
 def test_bad_options_are_user_errors(cell, program, tmp_path, capsys):
     model = str(cell["model_path"])
     out = str(tmp_path / "o.mod")

@@ -1,0 +1,111 @@
+"""The modules of one controller task in a batch, which see each other's data.
+
+A RobotStudio or controller backup keeps each task's modules under
+`RAPID/TASK<n>/` (`PROGMOD/*.mod`, `SYSMOD/*.sys`); a task's folder saved on its
+own holds the same `PROGMOD` and `SYSMOD` folders. The controller loads them
+together, so a program module uses the tools, work objects and targets another
+module of its task declares (`CalibData.sys`, `user.sys`, ...). A batch over such
+a tree gives each file the other modules of its task as declaration files, as
+`Compensator.load(decl_files)` would; a folder outside that layout is a set of
+unrelated programs and gets nothing (one program must not take another's `tGripper`).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import replace
+from pathlib import Path, PurePath
+
+from rapidfix.exceptions import RapidfixError
+from rapidfix.postprocess.compensator import Compensator
+
+_TASK_DIR = re.compile(r"TASK\d+", re.IGNORECASE)
+_MODULE_DIRS = frozenset({"PROGMOD", "SYSMOD"})
+
+
+def task_folder(rel: PurePath) -> PurePath | None:
+    """The task folder a file (relative to the batch's root) lies in: the one holding
+    its `PROGMOD`/`SYSMOD` folder, or a `RAPID/TASK<n>` folder; None outside both."""
+    parts = rel.parts[:-1]
+    for k in range(len(parts) - 1, -1, -1):
+        if parts[k].upper() in _MODULE_DIRS:
+            return PurePath(*parts[:k])
+        if k > 0 and _TASK_DIR.fullmatch(parts[k]) and parts[k - 1].upper() == "RAPID":
+            return PurePath(*parts[:k + 1])
+    return None
+
+
+def task_neighbours(files: Sequence[PurePath]) -> dict[PurePath, tuple[PurePath, ...]]:
+    """For each RAPID file in a task folder: the other RAPID files of that task, sorted
+    (the order fixes the declarations' hash in the output's header)."""
+    members: dict[PurePath, list[PurePath]] = {}
+    for rel in files:
+        folder = task_folder(rel)
+        if folder is not None:
+            members.setdefault(folder, []).append(rel)
+    out: dict[PurePath, tuple[PurePath, ...]] = {}
+    for group in members.values():
+        ordered = sorted(group)
+        for rel in ordered:
+            out[rel] = tuple(other for other in ordered if other != rel)
+    return out
+
+
+@contextmanager
+def task_snapshot(root: Path, neighbours: dict[PurePath, tuple[PurePath, ...]],
+                  in_place: bool) -> Iterator[Callable[[PurePath], str]]:
+    """Where the jobs read each task module from: the input itself, or, when the batch
+    rewrites its inputs in place, a copy taken before any job starts (a module another
+    worker has meanwhile rewritten must not lend its compensated targets to a second
+    compensation). The copies go when the batch ends."""
+    modules = sorted({m for group in neighbours.values() for m in group})
+    if not in_place or not modules:
+        yield lambda rel: str(root / rel)
+        return
+    with tempfile.TemporaryDirectory(prefix="rapidfix-task-") as tmp:
+        for rel in modules:
+            copy = Path(tmp) / rel
+            copy.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(root / rel, copy)
+        yield lambda rel: str(Path(tmp) / rel)
+
+
+#: parsed task modules per worker process: (file read, size, mtime) -> program, or None
+#: when the module does not parse (its own job reports why)
+_PARSED: dict[tuple[str, int, int], object | None] = {}
+
+
+def _parsed(name: str, read_from: str) -> object | None:
+    from rapidfix.rapid import parse_program
+
+    try:
+        stat = Path(read_from).stat()
+        key = (read_from, stat.st_size, stat.st_mtime_ns)
+        if key not in _PARSED:
+            _PARSED[key] = None
+            _PARSED[key] = parse_program(Path(read_from).read_bytes(), name)
+    except (RapidfixError, OSError):
+        return None
+    return _PARSED[key]
+
+
+def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> Compensator:
+    """`comp` with the task's other modules (those that parse) after its declaration
+    files; each module is (its name in messages, the file to read it from: the input,
+    or a copy taken before an in-place batch rewrites it)."""
+    programs, used = [], []
+    for name, read_from in modules:
+        program = _parsed(name, read_from)
+        if program is not None:
+            programs.append(program)
+            used.append(name)
+    if not programs:
+        return comp
+    return replace(comp, decls=[*comp.decls, *programs], decl_paths=[*comp.decl_paths, *used])
+
+
+__all__ = ["task_folder", "task_neighbours", "task_snapshot", "with_task_modules"]

@@ -1,0 +1,113 @@
+"""A batch over a controller backup: the modules of one task see each other's data.
+
+The sample ballbar program is split as a backup keeps a cell: its tool and work
+object in `RAPID/TASK1/SYSMOD/CalibData.sys`, the moves in `PROGMOD/Ballbar.mod`.
+The truth is the same program rewritten whole (everything declared in one file).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import PurePath
+
+import pytest
+
+from rapidfix.cli import main
+from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
+from rapidfix.postprocess.task_modules import task_folder
+
+FRAMES = re.compile(r"^    PERS (tooldata|wobjdata) .*\n", re.MULTILINE)
+JOINTTARGETS = re.compile(r"^\s*CONST jointtarget .*$", re.MULTILINE)
+
+
+def _calib(frames: str) -> str:
+    return f"MODULE CalibData(SYSMODULE)\n{frames}ENDMODULE\n"
+
+
+@pytest.fixture
+def backup(samples, tmp_path):
+    """A backup with two tasks (TASK2 lacks the data module) and a plain folder holding
+    the same two files, which are not one task."""
+    text = (samples / "ballbar.mod").read_text()
+    frames = "".join(m.group() for m in FRAMES.finditer(text))
+    assert frames.count("PERS") == 2
+    program = FRAMES.sub("", text)
+    root = tmp_path / "backup"
+    for task, files in (("TASK1", {"PROGMOD/Ballbar.mod": program,
+                                   "SYSMOD/CalibData.sys": _calib(frames)}),
+                        ("TASK2", {"PROGMOD/Ballbar.mod": program})):
+        for rel, content in files.items():
+            path = root / "RAPID" / task / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(content)
+    (root / "loose").mkdir()
+    (root / "loose" / "Ballbar.mod").write_text(program)
+    (root / "loose" / "CalibData.sys").write_text(_calib(frames))
+    return root, text
+
+
+def _args(src, model, *more):
+    return ["batch", str(src), *more, "--model", str(model), "-j", "2", "--no-progress"]
+
+
+def test_task_folders_are_found_where_a_backup_keeps_them():
+    assert task_folder(PurePath("B/RAPID/TASK1/PROGMOD/M.mod")) == PurePath("B/RAPID/TASK1")
+    assert task_folder(PurePath("rapid/task12/x.sys")) == PurePath("rapid/task12")
+    assert task_folder(PurePath("RAPID/TASK1.mod")) is None
+    assert task_folder(PurePath("cell/TASK1/M.mod")) is None  # not under RAPID
+    assert task_folder(PurePath("RAPID/T_ROB1/M.mod")) is None
+    # a task's folder saved on its own: the folder holding PROGMOD and SYSMOD
+    assert task_folder(PurePath("welder/RAPID/PROGMOD/M.mod")) == PurePath("welder/RAPID")
+    assert task_folder(PurePath("SYSMOD/user.sys")) == PurePath()
+    assert task_folder(PurePath("cell/progs/M.mod")) is None
+
+
+def test_a_module_uses_the_data_of_its_task_and_only_of_its_task(cell, comp, backup,
+                                                               tmp_path, capsys):
+    root, whole = backup
+    out = tmp_path / "out"
+    assert main(_args(root, cell["model_path"], str(out))) == 3
+    summary = json.loads((out / "rapidfix-batch.json").read_text())
+    files = {f["path"]: f for f in summary["results"]}
+    task1 = files["RAPID/TASK1/PROGMOD/Ballbar.mod"]
+    assert task1["status"] == "ok" and task1["moves_compensated"] == 21
+    truth = rewrite_source(whole.encode(), "whole.mod", comp, RewriteOptions()).data.decode()
+    written = (out / "RAPID/TASK1/PROGMOD/Ballbar.mod").read_text()
+    assert JOINTTARGETS.findall(written) == JOINTTARGETS.findall(truth)
+    for other in ("RAPID/TASK2/PROGMOD/Ballbar.mod", "loose/Ballbar.mod"):
+        assert files[other]["moves_compensated"] == 0, other
+        assert all("tBallbar is not declared in this file" in s
+                   for s in files[other]["skipped"]), files[other]["skipped"]
+    capsys.readouterr()
+    # the data module is part of what the output depends on: a changed tool load is seen
+    # (this model has no payload effect: the same joints, written again)
+    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
+    calib.write_text(calib.read_text().replace("[1.2,[0,0,60]", "[1.3,[0,0,60]", 1))
+    assert main(_args(root, cell["model_path"], str(out))) == 3
+    third = {f["path"]: f for f in json.loads((out / "rapidfix-batch.json").read_text())["results"]}
+    assert third["RAPID/TASK1/PROGMOD/Ballbar.mod"]["status"] == "ok"  # not up to date
+    assert third["RAPID/TASK1/PROGMOD/Ballbar.mod"]["moves_compensated"] == 21
+
+
+def test_in_place_reads_the_task_as_it_was_before_the_batch(cell, backup, tmp_path):
+    root, _ = backup
+    out = tmp_path / "out"
+    assert main(_args(root, cell["model_path"], str(out))) == 3
+    assert main(_args(root, cell["model_path"], "--in-place")) == 3
+    in_place = (root / "RAPID/TASK1/PROGMOD/Ballbar.mod").read_text()
+    assert JOINTTARGETS.findall(in_place) == JOINTTARGETS.findall(
+        (out / "RAPID/TASK1/PROGMOD/Ballbar.mod").read_text())
+    assert not list(tmp_path.glob("rapidfix-task-*"))
+
+
+def test_an_ambiguous_or_local_name_in_the_task_is_named(cell, backup, tmp_path):
+    root, _ = backup
+    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
+    (calib.parent / "Spare.sys").write_text(calib.read_text().replace("CalibData", "Spare"))
+    out = tmp_path / "out"
+    assert main(_args(root, cell["model_path"], str(out))) == 3
+    files = {f["path"]: f for f in json.loads((out / "rapidfix-batch.json").read_text())["results"]}
+    skipped = files["RAPID/TASK1/PROGMOD/Ballbar.mod"]["skipped"]
+    assert skipped and all("tBallbar is declared in module CalibData of" in s
+                           and "and in module Spare of" in s for s in skipped), skipped
