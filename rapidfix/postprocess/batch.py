@@ -289,10 +289,10 @@ def run_batch(
         jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings,
                  tuple((str(src_root / n), read_from(n)) for n in neighbours.get(f, ())))
                 for f in files]
-        return _run_jobs(jobs, settings, workers, progress, on_result)
+        return _run_jobs(jobs, workers, progress, on_result)
 
 
-def _run_jobs(jobs: list[_Job], settings: BatchSettings, workers: int | None, progress: bool,
+def _run_jobs(jobs: list[_Job], workers: int | None, progress: bool,
               on_result: Callable[[FileOutcome], None] | None) -> BatchSummary:
     """Run the batch's jobs (in parallel when there are several workers)."""
     # largest files first, so no worker is left with a big one at the end

@@ -209,7 +209,7 @@ def test_workers_are_forked_with_ctrl_c_held_back_and_take_it_once_ready(monkeyp
 
     monkeypatch.setattr(ProcessPoolExecutor, "submit", probe)
     results: list[tuple[bool, object]] = []
-    jobs = [("a", "b", f"f{k}", None) for k in range(3)]
+    jobs = [("a", "b", f"f{k}", None, ()) for k in range(3)]
     batch._run_parallel(jobs, 2, results, None, None)
     assert held_at_submit == [True, True, True]
     assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])  # let go after
