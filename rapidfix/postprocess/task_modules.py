@@ -22,6 +22,7 @@ from pathlib import Path, PurePath
 
 from rapidfix.exceptions import RapidfixError
 from rapidfix.postprocess.compensator import Compensator
+from rapidfix.postprocess.header import read_header
 
 _TASK_DIR = re.compile(r"TASK\d+", re.IGNORECASE)
 _MODULE_DIRS = frozenset({"PROGMOD", "SYSMOD"})
@@ -75,11 +76,14 @@ def task_snapshot(root: Path, neighbours: dict[PurePath, tuple[PurePath, ...]],
 
 
 #: parsed task modules per worker process: (file read, size, mtime) -> program, or None
-#: when the module does not parse (its own job reports why)
+#: when the module is not used (see `_parsed`)
 _PARSED: dict[tuple[str, int, int], object | None] = {}
 
 
 def _parsed(name: str, read_from: str) -> object | None:
+    """The module's program, or None when it does not parse (its own job reports why)
+    or carries a compensated program's header: its targets may already be compensated,
+    and a second compensation through them would be wrong without a word."""
     from rapidfix.rapid import parse_program
 
     try:
@@ -87,7 +91,9 @@ def _parsed(name: str, read_from: str) -> object | None:
         key = (read_from, stat.st_size, stat.st_mtime_ns)
         if key not in _PARSED:
             _PARSED[key] = None
-            _PARSED[key] = parse_program(Path(read_from).read_bytes(), name)
+            data = Path(read_from).read_bytes()
+            if read_header(data.decode("latin-1")) is None:
+                _PARSED[key] = parse_program(data, name)
     except (RapidfixError, OSError):
         return None
     return _PARSED[key]

@@ -111,3 +111,19 @@ def test_an_ambiguous_or_local_name_in_the_task_is_named(cell, backup, tmp_path)
     skipped = files["RAPID/TASK1/PROGMOD/Ballbar.mod"]["skipped"]
     assert skipped and all("tBallbar is declared in module CalibData of" in s
                            and "and in module Spare of" in s for s in skipped), skipped
+
+
+def test_a_compensated_module_lends_nothing(cell, backup, tmp_path):
+    """A module of the task that is itself a compensated output (its targets may be
+    compensated already) is not read for declarations: what it declares stays unknown
+    rather than compensated twice."""
+    root, _ = backup
+    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
+    lines = calib.read_text().splitlines(keepends=True)
+    lines.insert(1, "  ! rapidfix-compensated version: rapidfix 0.1.0\n")
+    calib.write_text("".join(lines))
+    out = tmp_path / "out"
+    assert main(_args(root, cell["model_path"], str(out), "--force")) == 3
+    results = json.loads((out / "rapidfix-batch.json").read_text())["results"]
+    files = {f["path"]: f for f in results}
+    assert files["RAPID/TASK1/PROGMOD/Ballbar.mod"]["moves_compensated"] == 0
