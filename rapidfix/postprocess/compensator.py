@@ -13,8 +13,9 @@ from typing import Any
 
 from rapidfix.digest import sha256_bytes, sha256_file
 from rapidfix.error_model import ErrorModel, load_model
-from rapidfix.exceptions import KinematicsError, ModelError
+from rapidfix.exceptions import KinematicsError, ModelError, RapidSemanticError
 from rapidfix.kinematics import RobotModel, load_robot, parse_robot
+from rapidfix.postprocess.header import read_header
 
 
 @dataclass
@@ -61,4 +62,10 @@ class Compensator:
 
         paths = [str(p) for p in (decl_files or [])]
         decls = [load_program(p) for p in paths]
+        for path, program in zip(paths, decls):
+            if read_header(program.source.text) is not None:
+                raise RapidSemanticError(
+                    "is a compensated program: the targets it declares may be compensated "
+                    "already, and a second compensation through them would be wrong",
+                    file=path, hint="pass the original file with Compensator.load(decl_files)")
         return cls(robot_model, model, str(model_path), sha256_file(model_path), decls, paths)

@@ -125,6 +125,22 @@ def test_declaration_files_are_seen_as_the_controller_sees_other_modules(
     assert "pass the file" not in err
 
 
+def test_a_compensated_declaration_file_is_refused(cell, program, tmp_path, capsys):
+    """A compensated output passed as a declaration file could lend targets compensated
+    once already: refused with the file named and the flag to use, nothing written."""
+    model = str(cell["model_path"])
+    compensated = tmp_path / "compensated.mod"
+    assert main(["rewrite", str(program), "--model", model, "-o", str(compensated)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "out.mod"
+    assert main(["rewrite", str(program), "--model", model, "-o", str(out),
+                 "--decls", str(compensated)]) == 1
+    err = capsys.readouterr().err
+    assert f"{compensated}: is a compensated program" in err
+    assert "pass the original file with --decls" in err and "Traceback" not in err
+    assert not out.exists()
+
+
 def test_bad_options_are_user_errors(cell, program, tmp_path, capsys):
     model = str(cell["model_path"])
     out = str(tmp_path / "o.mod")
