@@ -56,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         decl_files=tuple(args.decls),
         options=options_from_args(args),
         in_place=args.in_place,
+        task_modules=not args.no_task_modules,
     )
     try:
         summary = run_batch(args.in_dir, args.out_dir, settings, workers=args.jobs,

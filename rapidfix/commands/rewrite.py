@@ -25,6 +25,9 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--decls", action="append", default=[], metavar="FILE",
                         help="RAPID file declaring tooldata/wobjdata/robtargets the program "
                         "uses but does not declare (may be repeated)")
+    parser.add_argument("--no-task-modules", action="store_true",
+                        help="do not read the other modules of a controller task (a file "
+                        "under RAPID/TASK<n>/ or beside PROGMOD/SYSMOD) for the data it uses")
     parser.add_argument("--emit", choices=("jointtargets", "robtargets"), default="jointtargets",
                         help="jointtargets: MoveAbsJ to compensated joint targets (default); "
                         "robtargets: keep the instructions, write filtered robtargets")
@@ -114,7 +117,12 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
 
 def run(args: argparse.Namespace) -> int:
     """Rewrite one program; print the skipped targets and the predicted deviation."""
-    from rapidfix.postprocess import Compensator, rewrite_file
+    from rapidfix.postprocess import (
+        Compensator,
+        modules_beside,
+        rewrite_file,
+        with_task_modules,
+    )
 
     source = Path(args.program)
     if args.in_place:
@@ -128,6 +136,12 @@ def run(args: argparse.Namespace) -> int:
     options = options_from_args(args)
     try:
         comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
+        task = None if args.no_task_modules else modules_beside(source)
+        if task is not None and task[1]:
+            comp = with_task_modules(comp, [(str(m), str(m)) for m in task[1]])
+            used = len(comp.decl_paths) - len(args.decls)
+            print(f"declarations also read from {used} other module(s) of its task "
+                  f"({task[0]})")
         result = rewrite_file(source, target, comp, options, in_place=args.in_place)
     except RapidfixError as err:
         reword(err)

@@ -19,6 +19,7 @@ Joins the RAPID layer, the kinematics and the error model. One module per idea:
 - `rewrite`      one file: options, result, header, file I/O; runs planning, refinement,
                  emission and the check (`rewrite_file`, `rewrite_source`)
 - `batch`        a tree of programs in parallel (`run_batch`)
+- `task_modules` the modules of one controller task, which see each other's data
 - `execute`      the joints a nominal controller commands for a program (to "run" it)
 """
 
@@ -32,6 +33,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.postprocess.batch import RAPID_SUFFIXES, BatchSettings, run_batch, write_summary
     from rapidfix.postprocess.emission_forms import robtarget_literals
     from rapidfix.postprocess.execute import Execution, align_axis1, commanded_motions
+    from rapidfix.postprocess.task_modules import modules_beside, with_task_modules
 
 # The other exports, name -> module of this package: each is imported from its module on
 # first use (PEP 562), so exporting a name costs nothing until it is used.
@@ -42,8 +44,10 @@ LAZY_EXPORTS = {
     "Execution": "execute",
     "align_axis1": "execute",
     "commanded_motions": "execute",
+    "modules_beside": "task_modules",
     "robtarget_literals": "emission_forms",
     "run_batch": "batch",
+    "with_task_modules": "task_modules",
     "write_summary": "batch",
 }
 
@@ -56,10 +60,12 @@ __all__ = [
     "RewriteResult",
     "align_axis1",
     "commanded_motions",
+    "modules_beside",
     "rewrite_file",
     "rewrite_source",
     "robtarget_literals",
     "run_batch",
+    "with_task_modules",
     "write_summary",
 ]
 

@@ -45,6 +45,8 @@ class BatchSettings:
     decl_files: tuple[str, ...]
     options: RewriteOptions
     in_place: bool = False
+    #: give each file of a controller task the task's other modules as declarations
+    task_modules: bool = True
 
 
 @dataclass
@@ -284,7 +286,8 @@ def run_batch(
         files = [f for f in files if is_rapid(f)]
     # fail early, once, on a bad model or robot instead of once per file
     _compensator(settings)
-    neighbours = task_neighbours([f for f in files if is_rapid(f)])
+    neighbours = task_neighbours([f for f in files if is_rapid(f)]) if settings.task_modules \
+        else {}
     with task_snapshot(src_root, neighbours, settings.in_place) as read_from:
         jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings,
                  tuple((str(src_root / n), read_from(n)) for n in neighbours.get(f, ())))

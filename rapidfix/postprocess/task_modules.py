@@ -29,14 +29,14 @@ _MODULE_DIRS = frozenset({"PROGMOD", "SYSMOD"})
 
 
 def task_folder(rel: PurePath) -> PurePath | None:
-    """The task folder a file (relative to the batch's root) lies in: the one holding
-    its `PROGMOD`/`SYSMOD` folder, or a `RAPID/TASK<n>` folder; None outside both."""
+    """The task folder of a module file: the folder above the `PROGMOD` or `SYSMOD`
+    folder it lies in, or the `RAPID/TASK<n>` folder it lies in itself; None for a file
+    anywhere else (a task's modules lie there, not in folders further down)."""
     parts = rel.parts[:-1]
-    for k in range(len(parts) - 1, -1, -1):
-        if parts[k].upper() in _MODULE_DIRS:
-            return PurePath(*parts[:k])
-        if k > 0 and _TASK_DIR.fullmatch(parts[k]) and parts[k - 1].upper() == "RAPID":
-            return PurePath(*parts[:k + 1])
+    if parts and parts[-1].upper() in _MODULE_DIRS:
+        return PurePath(*parts[:-1])
+    if len(parts) >= 2 and _TASK_DIR.fullmatch(parts[-1]) and parts[-2].upper() == "RAPID":
+        return PurePath(*parts)
     return None
 
 
@@ -54,6 +54,27 @@ def task_neighbours(files: Sequence[PurePath]) -> dict[PurePath, tuple[PurePath,
         for rel in ordered:
             out[rel] = tuple(other for other in ordered if other != rel)
     return out
+
+
+_RAPID_SUFFIXES = frozenset({".mod", ".modx", ".prg", ".sys"})
+
+
+def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
+    """For one program file: its task folder and the task's other RAPID modules, or None
+    outside a task folder. Only where the controller keeps a task's modules is looked
+    at (the task folder itself for `RAPID/TASK<n>`, and its `PROGMOD` and `SYSMOD`), not
+    every folder below it."""
+    real = Path(path).resolve()
+    folder = task_folder(PurePath(real))
+    if folder is None:
+        return None
+    task = Path(folder)
+    places = [task, *(d for d in task.iterdir() if d.is_dir() and d.name.upper() in _MODULE_DIRS)]
+    modules = sorted(f for place in places for f in place.iterdir()
+                     if f.is_file() and f.suffix.lower() in _RAPID_SUFFIXES and f != real
+                     and not (f.name.startswith(".") and f.name.endswith(".tmp"))
+                     and task_folder(PurePath(f)) == folder)
+    return task, modules
 
 
 @contextmanager
@@ -114,4 +135,5 @@ def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> 
     return replace(comp, decls=[*comp.decls, *programs], decl_paths=[*comp.decl_paths, *used])
 
 
-__all__ = ["task_folder", "task_neighbours", "task_snapshot", "with_task_modules"]
+__all__ = ["modules_beside", "task_folder", "task_neighbours", "task_snapshot",
+           "with_task_modules"]

@@ -61,6 +61,10 @@ def test_task_folders_are_found_where_a_backup_keeps_them():
     assert task_folder(PurePath("welder/RAPID/PROGMOD/M.mod")) == PurePath("welder/RAPID")
     assert task_folder(PurePath("SYSMOD/user.sys")) == PurePath()
     assert task_folder(PurePath("cell/progs/M.mod")) is None
+    # a file further down is not one of the task's modules
+    assert task_folder(PurePath("RAPID/TASK1/SYSMOD/old/M.sys")) is None
+    assert task_folder(PurePath("RAPID/TASK1/extra/M.mod")) is None
+    assert task_folder(PurePath("RAPID/TASK1/M.mod")) == PurePath("RAPID/TASK1")
 
 
 def test_a_module_uses_the_data_of_its_task_and_only_of_its_task(cell, comp, backup,
@@ -127,3 +131,38 @@ def test_a_compensated_module_lends_nothing(cell, backup, tmp_path):
     results = json.loads((out / "rapidfix-batch.json").read_text())["results"]
     files = {f["path"]: f for f in results}
     assert files["RAPID/TASK1/PROGMOD/Ballbar.mod"]["moves_compensated"] == 0
+
+
+def test_rewrite_of_one_module_reads_its_task_and_no_further(cell, comp, backup, tmp_path,
+                                                            capsys):
+    """`rewrite` of one module of a backup reads the other modules of its task where the
+    controller keeps them (PROGMOD, SYSMOD), as the batch does; `--no-task-modules`, or a
+    file outside a task folder, reads nothing more."""
+    root, whole = backup
+    # a RAPID file further down the task folder is not one of its modules
+    (root / "RAPID/TASK1/SYSMOD/old").mkdir()
+    (root / "RAPID/TASK1/SYSMOD/old/Spare.sys").write_text(
+        (root / "RAPID/TASK1/SYSMOD/CalibData.sys").read_text().replace("CalibData", "Spare"))
+    program = root / "RAPID/TASK1/PROGMOD/Ballbar.mod"
+    model = str(cell["model_path"])
+    out = tmp_path / "one.mod"
+    assert main(["rewrite", str(program), "--model", model, "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert f"declarations also read from 1 other module(s) of its task ({root / 'RAPID/TASK1'})" \
+        in printed
+    truth = rewrite_source(whole.encode(), "whole.mod", comp, RewriteOptions()).data.decode()
+    assert JOINTTARGETS.findall(out.read_text()) == JOINTTARGETS.findall(truth)
+    assert main(["rewrite", str(program), "--model", model, "-o", str(out), "--force",
+                 "--no-task-modules"]) == 3
+    assert "declarations also read" not in capsys.readouterr().out
+    assert main(["rewrite", str(root / "loose/Ballbar.mod"), "--model", model,
+                 "-o", str(out), "--force"]) == 3
+    assert "declarations also read" not in capsys.readouterr().out
+
+
+def test_batch_without_task_modules_reads_each_file_alone(cell, backup, tmp_path):
+    root, _ = backup
+    out = tmp_path / "out"
+    assert main(_args(root, cell["model_path"], str(out), "--no-task-modules")) == 3
+    results = json.loads((out / "rapidfix-batch.json").read_text())["results"]
+    assert sum(f["moves_compensated"] for f in results) == 0
