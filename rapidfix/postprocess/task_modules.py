@@ -69,11 +69,15 @@ def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
     if folder is None:
         return None
     task = Path(folder)
-    places = [task, *(d for d in task.iterdir() if d.is_dir() and d.name.upper() in _MODULE_DIRS)]
-    modules = sorted(f for place in places for f in place.iterdir()
-                     if f.is_file() and f.suffix.lower() in _RAPID_SUFFIXES and f != real
-                     and not (f.name.startswith(".") and f.name.endswith(".tmp"))
-                     and task_folder(PurePath(f)) == folder)
+    try:
+        places = [task, *(d for d in task.iterdir()
+                          if d.is_dir() and d.name.upper() in _MODULE_DIRS)]
+        modules = sorted(f for place in places for f in place.iterdir()
+                         if f.is_file() and f.suffix.lower() in _RAPID_SUFFIXES and f != real
+                         and not (f.name.startswith(".") and f.name.endswith(".tmp"))
+                         and task_folder(PurePath(f)) == folder)
+    except OSError:  # a folder that cannot be listed lends nothing
+        return task, []
     return task, modules
 
 
