@@ -27,7 +27,8 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
                         "uses but does not declare (may be repeated)")
     parser.add_argument("--no-task-modules", action="store_true",
                         help="do not read the other modules of a controller task (a file "
-                        "under RAPID/TASK<n>/ or beside PROGMOD/SYSMOD) for the data it uses")
+                        "in RAPID/TASK<n>/, in a task's PROGMOD/SYSMOD, or listed in a .pgf "
+                        "program file) for the data it uses")
     parser.add_argument("--emit", choices=("jointtargets", "robtargets"), default="jointtargets",
                         help="jointtargets: MoveAbsJ to compensated joint targets (default); "
                         "robtargets: keep the instructions, write filtered robtargets")

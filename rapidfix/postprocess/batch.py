@@ -281,13 +281,11 @@ def run_batch(
                 file=dst_root,
                 hint="use BatchSettings(in_place=True) to rewrite the inputs, keeping backups",
             )
-    files = discover(src_root)
-    if settings.in_place:
-        files = [f for f in files if is_rapid(f)]
+    found = discover(src_root)
+    files = [f for f in found if is_rapid(f)] if settings.in_place else found
     # fail early, once, on a bad model or robot instead of once per file
     _compensator(settings)
-    neighbours = task_neighbours([f for f in files if is_rapid(f)]) if settings.task_modules \
-        else {}
+    neighbours = task_neighbours(found, src_root) if settings.task_modules else {}
     with task_snapshot(src_root, neighbours, settings.in_place) as read_from:
         jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings,
                  tuple((str(src_root / n), read_from(n)) for n in neighbours.get(f, ())))

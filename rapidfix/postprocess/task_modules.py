@@ -2,7 +2,8 @@
 
 A RobotStudio or controller backup keeps each task's modules under
 `RAPID/TASK<n>/` (`PROGMOD/*.mod`, `SYSMOD/*.sys`); a task's folder saved on its
-own holds the same `PROGMOD` and `SYSMOD` folders. The controller loads them
+own holds the same `PROGMOD` and `SYSMOD` folders; a saved program is a folder
+whose `.pgf` file lists its modules. The controller loads them
 together, so a program module uses the tools, work objects and targets another
 module of its task declares (`CalibData.sys`, `user.sys`, ...). A batch over such
 a tree gives each file the other modules of its task as declaration files, as
@@ -26,6 +27,7 @@ from rapidfix.postprocess.header import read_header
 
 _TASK_DIR = re.compile(r"TASK\d+", re.IGNORECASE)
 _MODULE_DIRS = frozenset({"PROGMOD", "SYSMOD"})
+_RAPID_SUFFIXES = frozenset({".mod", ".modx", ".prg", ".sys"})
 
 
 def task_folder(rel: PurePath) -> PurePath | None:
@@ -40,23 +42,50 @@ def task_folder(rel: PurePath) -> PurePath | None:
     return None
 
 
-def task_neighbours(files: Sequence[PurePath]) -> dict[PurePath, tuple[PurePath, ...]]:
-    """For each RAPID file in a task folder: the other RAPID files of that task, sorted
-    (the order fixes the declarations' hash in the output's header)."""
-    members: dict[PurePath, list[PurePath]] = {}
+def task_neighbours(files: Sequence[PurePath], root: Path | None = None
+                    ) -> dict[PurePath, tuple[PurePath, ...]]:
+    """For each RAPID file of a task: the other RAPID files of that task, sorted (the
+    order fixes the declarations' hash in the output's header). `files` are relative to
+    `root`; with `root`, the `.pgf` program files among them are read too, each naming
+    the modules of one program in its folder."""
+    groups: dict[object, set[PurePath]] = {}
     for rel in files:
         folder = task_folder(rel)
-        if folder is not None:
-            members.setdefault(folder, []).append(rel)
-    out: dict[PurePath, tuple[PurePath, ...]] = {}
-    for group in members.values():
-        ordered = sorted(group)
-        for rel in ordered:
-            out[rel] = tuple(other for other in ordered if other != rel)
-    return out
+        if folder is not None and rel.suffix.lower() in _RAPID_SUFFIXES:
+            groups.setdefault(folder, set()).add(rel)
+    if root is not None:
+        present = {(rel.parent, rel.name.lower()): rel for rel in files
+                   if rel.suffix.lower() in _RAPID_SUFFIXES}
+        for rel in files:
+            if rel.suffix.lower() == ".pgf":
+                listed = {present.get((rel.parent, name.lower()))
+                          for name in program_modules(root / rel)}
+                groups[rel] = listed - {None}
+    out: dict[PurePath, set[PurePath]] = {}
+    for group in groups.values():
+        for rel in group:
+            out.setdefault(rel, set()).update(group - {rel})
+    return {rel: tuple(sorted(others)) for rel, others in out.items() if others}
 
 
-_RAPID_SUFFIXES = frozenset({".mod", ".modx", ".prg", ".sys"})
+#: a program file larger than this is not a program file
+_PGF_LIMIT = 1 << 20
+
+
+def program_modules(pgf: Path) -> list[str]:
+    """The module file names a `.pgf` program file lists (`<Module>Main.mod</Module>`),
+    or none when it cannot be read as one."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        if pgf.stat().st_size > _PGF_LIMIT:
+            return []
+        tree = ET.parse(pgf)
+    except (OSError, ET.ParseError):
+        return []
+    names = [(node.text or "").strip() for node in tree.getroot().iter()
+             if node.tag.lower() == "module"]
+    return [PurePath(n.replace("\\", "/")).name for n in names if n]
 
 
 def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
@@ -67,7 +96,7 @@ def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
     real = Path(path).resolve()
     folder = task_folder(PurePath(real))
     if folder is None:
-        return None
+        return _program_beside(real)
     task = Path(folder)
     try:
         places = [task, *(d for d in task.iterdir()
@@ -79,6 +108,22 @@ def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
     except OSError:  # a folder that cannot be listed lends nothing
         return task, []
     return task, modules
+
+
+def _program_beside(real: Path) -> tuple[Path, list[Path]] | None:
+    """The modules listed with `real` in a `.pgf` program file of its folder, or None."""
+    try:
+        pgfs = sorted(f for f in real.parent.iterdir() if f.suffix.lower() == ".pgf")
+    except OSError:
+        return None
+    name = real.name.lower()
+    modules: set[Path] = set()
+    for pgf in pgfs:
+        listed = {n.lower() for n in program_modules(pgf)}
+        if name in listed:
+            modules.update(f for f in real.parent.iterdir()
+                           if f.name.lower() in listed and f != real and f.is_file())
+    return (real.parent, sorted(modules)) if modules else None
 
 
 @contextmanager
@@ -139,5 +184,5 @@ def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> 
     return replace(comp, decls=[*comp.decls, *programs], decl_paths=[*comp.decl_paths, *used])
 
 
-__all__ = ["modules_beside", "task_folder", "task_neighbours", "task_snapshot",
-           "with_task_modules"]
+__all__ = ["modules_beside", "program_modules", "task_folder", "task_neighbours",
+           "task_snapshot", "with_task_modules"]

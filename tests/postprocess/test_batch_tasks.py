@@ -166,3 +166,43 @@ def test_batch_without_task_modules_reads_each_file_alone(cell, backup, tmp_path
     assert main(_args(root, cell["model_path"], str(out), "--no-task-modules")) == 3
     results = json.loads((out / "rapidfix-batch.json").read_text())["results"]
     assert sum(f["moves_compensated"] for f in results) == 0
+
+
+PGF = """<?xml version="1.0" encoding="ISO-8859-1" ?>
+<Program>
+\t<Module>Ballbar.mod</Module>
+\t<Module>CalibData.sys</Module>
+</Program>
+"""
+
+
+def test_a_saved_program_folder_is_one_task(cell, comp, backup, tmp_path, capsys):
+    """A program saved with its .pgf file: the modules it lists see each other's data, in
+    `batch` and in `rewrite`; a module of the folder it does not list sees nothing."""
+    root, whole = backup
+    saved = root / "saved"
+    saved.mkdir()
+    for name in ("Ballbar.mod", "CalibData.sys"):
+        (saved / name).write_text((root / "loose" / name).read_text())
+    (saved / "Other.mod").write_text((root / "loose" / "Ballbar.mod").read_text()
+                                     .replace("MODULE Ballbar", "MODULE Other", 1))
+    (saved / "Cell.pgf").write_text(PGF)
+    truth = rewrite_source(whole.encode(), "whole.mod", comp, RewriteOptions()).data.decode()
+    out = tmp_path / "out"
+    assert main(_args(saved, cell["model_path"], str(out))) == 3
+    files = {f["path"]: f for f in
+             json.loads((out / "rapidfix-batch.json").read_text())["results"]}
+    assert files["Ballbar.mod"]["moves_compensated"] == 21
+    assert files["Other.mod"]["moves_compensated"] == 0
+    assert JOINTTARGETS.findall((out / "Ballbar.mod").read_text()) == JOINTTARGETS.findall(truth)
+    assert (out / "Cell.pgf").read_text() == PGF  # copied as it is
+    one = tmp_path / "one.mod"
+    assert main(["rewrite", str(saved / "Ballbar.mod"), "--model", str(cell["model_path"]),
+                 "-o", str(one)]) == 0
+    assert f"1 other module(s) of its task ({saved})" in capsys.readouterr().out
+    # a file that is not a program file lends nothing and stops nothing
+    (saved / "Cell.pgf").write_text("<Program><Module>Ballbar.mod</Modu")
+    assert main(_args(saved, cell["model_path"], str(tmp_path / "out2"))) == 3
+    broken = {f["path"]: f for f in
+              json.loads((tmp_path / "out2/rapidfix-batch.json").read_text())["results"]}
+    assert broken["Ballbar.mod"]["moves_compensated"] == 0
