@@ -90,9 +90,10 @@ def program_modules(pgf: Path) -> list[str]:
 
 def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
     """For one program file: its task folder and the task's other RAPID modules, or None
-    outside a task folder. Only where the controller keeps a task's modules is looked
-    at (the task folder itself for `RAPID/TASK<n>`, and its `PROGMOD` and `SYSMOD`), not
-    every folder below it."""
+    outside a task. Only where the controller keeps a task's modules is looked at (the
+    task folder itself for `RAPID/TASK<n>`, and its `PROGMOD` and `SYSMOD`), not every
+    folder below it; outside a task folder, the modules a `.pgf` program file of the
+    file's folder lists with it."""
     real = Path(path).resolve()
     folder = task_folder(PurePath(real))
     if folder is None:
@@ -113,16 +114,16 @@ def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
 def _program_beside(real: Path) -> tuple[Path, list[Path]] | None:
     """The modules listed with `real` in a `.pgf` program file of its folder, or None."""
     try:
-        pgfs = sorted(f for f in real.parent.iterdir() if f.suffix.lower() == ".pgf")
+        beside = [f for f in real.parent.iterdir() if f.is_file()]
     except OSError:
         return None
     name = real.name.lower()
     modules: set[Path] = set()
-    for pgf in pgfs:
+    for pgf in sorted(f for f in beside if f.suffix.lower() == ".pgf"):
         listed = {n.lower() for n in program_modules(pgf)}
         if name in listed:
-            modules.update(f for f in real.parent.iterdir()
-                           if f.name.lower() in listed and f != real and f.is_file())
+            modules.update(f for f in beside if f.name.lower() in listed and f != real
+                           and f.suffix.lower() in _RAPID_SUFFIXES)
     return (real.parent, sorted(modules)) if modules else None
 
 
