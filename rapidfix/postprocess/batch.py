@@ -30,9 +30,12 @@ from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.header import read_header
 from rapidfix.postprocess.rewrite import RewriteOptions, header_options, rewrite_file
-from rapidfix.postprocess.task_modules import task_neighbours, task_snapshot, with_task_modules
-
-RAPID_SUFFIXES = (".mod", ".modx", ".prg", ".sys")
+from rapidfix.postprocess.task_modules import (
+    RAPID_SUFFIXES,
+    task_neighbours,
+    task_snapshot,
+    with_task_modules,
+)
 
 
 @dataclass(frozen=True)

@@ -97,25 +97,25 @@ class Declarations:
     def __init__(self, programs: list[Program]) -> None:
         self._by_name: dict[str, Declaration] = {}
         self._hidden: dict[str, str] = {}  # name -> why a declaration of it is not used
+        ambiguous: dict[str, str] = {}
         for program in programs:
             for decl in program.declarations:
                 if decl.routine is not None:
                     continue
                 key = decl.key
-                where = f"{decl.name} in module {decl.module} of {decl.source.filename}"
-                if decl.local:
-                    self._hidden.setdefault(key, f"{where} is LOCAL to that module")
-                    continue
                 first = self._by_name.get(key)
-                if first is not None:
-                    self._hidden[key] = (f"{decl.name} is declared in module {first.module} "
-                                         f"of {first.source.filename} and in module "
-                                         f"{decl.module} of {decl.source.filename}")
-                    continue
-                self._by_name[key] = decl
-        for key in self._hidden:
-            if key in self._by_name and "is declared in module" in self._hidden[key]:
-                del self._by_name[key]
+                if decl.local:
+                    self._hidden.setdefault(key, f"{decl.name} in module {decl.module} of "
+                                                 f"{decl.source.filename} is LOCAL to that module")
+                elif first is not None:
+                    ambiguous[key] = (f"{decl.name} is declared in module {first.module} of "
+                                      f"{first.source.filename} and in module {decl.module} "
+                                      f"of {decl.source.filename}")
+                else:
+                    self._by_name[key] = decl
+        for key, why in ambiguous.items():  # taken from neither
+            del self._by_name[key]
+            self._hidden[key] = why
 
     def get(self, name: str, type_name: str) -> Any:
         """Typed value of a declaration of this type, or None."""
