@@ -141,8 +141,13 @@ def run(args: argparse.Namespace) -> int:
         if task is not None and task[1]:
             comp = with_task_modules(comp, [(str(m), str(m)) for m in task[1]])
             used = len(comp.decl_paths) - len(args.decls)
-            print(f"declarations also read from {used} other module(s) of its task "
-                  f"({task[0]})")
+            if used:
+                print(f"declarations also read from {used} other module(s) of its task "
+                      f"({task[0]})")
+            if used < len(task[1]):
+                print(f"rapidfix: warning: {len(task[1]) - used} module(s) of its task "
+                      f"({task[0]}) not read: they do not parse or are compensated programs",
+                      file=sys.stderr)
         result = rewrite_file(source, target, comp, options, in_place=args.in_place)
     except RapidfixError as err:
         reword(err)

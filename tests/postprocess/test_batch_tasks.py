@@ -206,3 +206,15 @@ def test_a_saved_program_folder_is_one_task(cell, comp, backup, tmp_path, capsys
     broken = {f["path"]: f for f in
               json.loads((tmp_path / "out2/rapidfix-batch.json").read_text())["results"]}
     assert broken["Ballbar.mod"]["moves_compensated"] == 0
+
+
+def test_rewrite_says_when_a_module_of_its_task_is_not_read(cell, backup, tmp_path, capsys):
+    root, _ = backup
+    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
+    calib.write_text(calib.read_text().replace("ENDMODULE", "ENDMOD"))
+    assert main(["rewrite", str(root / "RAPID/TASK1/PROGMOD/Ballbar.mod"), "--model",
+                 str(cell["model_path"]), "-o", str(tmp_path / "one.mod")]) == 3
+    out, err = capsys.readouterr()
+    assert "declarations also read" not in out
+    assert (f"rapidfix: warning: 1 module(s) of its task ({root / 'RAPID/TASK1'}) not read: "
+            "they do not parse or are compensated programs") in err
