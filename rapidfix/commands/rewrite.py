@@ -15,6 +15,7 @@ from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
     from rapidfix.postprocess import RewriteOptions
+    from rapidfix.postprocess.rewrite import Skipped
 
 
 def add_common_options(parser: argparse.ArgumentParser) -> None:
@@ -63,7 +64,47 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("program", metavar="PROG", help="RAPID program (.mod, .modx, .prg, .sys)")
     parser.add_argument("-o", "--output", metavar="OUT", help="output file")
     add_common_options(parser)
+    parser.add_argument("--all-skipped", action="store_true",
+                        help=f"list every move left as it was (by default, past "
+                        f"{SKIP_LIST_LIMIT} the first {SKIP_LIST_HEAD} are listed and the "
+                        "rest counted by reason)")
     parser.set_defaults(func=run)
+
+
+#: A program that fails everywhere (written for another work object or robot) can leave
+#: tens of thousands of moves as they were: past SKIP_LIST_LIMIT, the first SKIP_LIST_HEAD
+#: are listed and the rest counted by the kind of their reason.
+SKIP_LIST_LIMIT = 50
+SKIP_LIST_HEAD = 20
+_PARTICULARS = re.compile(r"\[[^\[\]]*\]|\([^()]*\)|(?<![\w.])-?\d+(?:\.\d+)?(?![\w.])")
+
+
+def reason_kind(reason: str) -> str:
+    """A skip reason with its particulars (numbers, bracketed lists, remarks in
+    parentheses) shown as '…': what moves skipped for the same cause share."""
+    while True:
+        kind = _PARTICULARS.sub("…", reason)
+        if kind == reason:
+            return kind
+        reason = kind
+
+
+def skipped_lines(skipped: list[Skipped], every: bool = False) -> list[str]:
+    """The lines listing skipped moves, reasons in the command's words: every one, or past
+    SKIP_LIST_LIMIT the first SKIP_LIST_HEAD and a count per kind of reason for the rest,
+    most frequent first."""
+    worded = [replace(move, reason=in_cli_words(move.reason)) for move in skipped]
+    if every or len(worded) <= SKIP_LIST_LIMIT:
+        return [str(move) for move in worded]
+    rest: dict[str, int] = {}
+    for move in worded[SKIP_LIST_HEAD:]:
+        kind = reason_kind(move.reason)
+        rest[kind] = rest.get(kind, 0) + 1
+    counted = sorted(rest.items(), key=lambda item: -item[1])
+    return [*map(str, worded[:SKIP_LIST_HEAD]),
+            f"{len(skipped) - SKIP_LIST_HEAD:,} more moves left as they were, not listed "
+            "(--all-skipped lists them):",
+            *(f"  {count:,} × {kind}" for kind, count in counted)]
 
 
 #: How the library's messages name an option -> the command line's flag. The library
@@ -155,9 +196,8 @@ def run(args: argparse.Namespace) -> int:
     notes = [in_cli_words(note) for note in result.notes]
     for line in replace(result, notes=notes).report_lines():
         print(line)
-    for skipped in result.skipped:
-        print(f"rapidfix: warning: {replace(skipped, reason=in_cli_words(skipped.reason))}",
-              file=sys.stderr)
+    for line in skipped_lines(result.skipped, args.all_skipped):
+        print(f"rapidfix: warning: {line}", file=sys.stderr)
     for warning in result.warnings:
         print(f"rapidfix: warning: {in_cli_words(warning)}", file=sys.stderr)
     if result.skipped and options.strict:

@@ -275,3 +275,39 @@ def test_targets_passed_to_an_unknown_procedure_are_named_and_left_as_written(
     assert main(["rewrite", str(src), "--model", str(cell["model_path"]), "-o", str(out),
                  "--force"]) == 0
     assert "not a motion instruction" not in capsys.readouterr().err
+
+
+def test_a_program_failing_everywhere_lists_the_first_moves_and_counts_the_rest(
+        cell, tmp_path, capsys):
+    """A program written for tools this file does not declare leaves every move as it was:
+    past 50 skipped moves, the first 20 are listed and the rest counted by the kind of
+    their reason (each tool its own kind); --all-skipped lists every one."""
+    from rapidfix.commands.rewrite import SKIP_LIST_HEAD, reason_kind
+
+    moves = [f"    MoveL pA, v100, z1, {'tBar' if k % 10 else 'tCan'};" for k in range(70)]
+    text = USES_OUTSIDE_DATA.replace("EXTAX", EXTAX).replace(
+        "    MoveJ pA, v100, fine, tBar\\WObj:=wPlate;", "\n".join(moves))
+    prog = tmp_path / "station.mod"
+    prog.write_text(text)
+    model = str(cell["model_path"])
+    assert main(["rewrite", str(prog), "--model", model, "-o", str(tmp_path / "o.mod")]) == 3
+    lines = capsys.readouterr().err.splitlines()
+    listed = [line for line in lines if f"{prog}:" in line]
+    assert [line.split(f"{prog}:")[1].split(":")[0] for line in listed] == [
+        str(4 + k) for k in range(SKIP_LIST_HEAD)]
+    assert lines[SKIP_LIST_HEAD] == ("rapidfix: warning: 50 more moves left as they were, not "
+                                     "listed (--all-skipped lists them):")
+    # moves 20..69: tCan on 20, 30, ... 60 (5), tBar on the other 45
+    assert lines[SKIP_LIST_HEAD + 1:SKIP_LIST_HEAD + 3] == [
+        "rapidfix: warning:   45 × tool tBar: tBar is not declared in this file …",
+        "rapidfix: warning:   5 × tool tCan: tCan is not declared in this file …"]
+    assert len(lines) == SKIP_LIST_HEAD + 3
+    assert main(["rewrite", str(prog), "--model", model, "-o", str(tmp_path / "o.mod"),
+                 "--all-skipped"]) == 3
+    every = [line for line in capsys.readouterr().err.splitlines() if f"{prog}:" in line]
+    assert len(every) == 70 and every[:SKIP_LIST_HEAD] == listed
+    assert reason_kind("no solution on the branch its confdata [0, 0, 0, 0] names (it is "
+                       "reachable with [0, -1, 0, 0], [0, 1, 2, 1])") == (
+        "no solution on the branch its confdata … names …")
+    assert reason_kind("joint 4 at 199.779° is outside [-200, 200] at p3_2") == (
+        "joint … at …° is outside … at p3_2")
