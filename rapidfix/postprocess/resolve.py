@@ -97,6 +97,7 @@ class Declarations:
     def __init__(self, programs: list[Program]) -> None:
         self._by_name: dict[str, Declaration] = {}
         self._hidden: dict[str, str] = {}  # name -> why a declaration of it is not used
+        self._global: dict[str, Declaration] = {}  # the first global one, ambiguous or not
         ambiguous: dict[str, str] = {}
         for program in programs:
             for decl in program.declarations:
@@ -107,7 +108,9 @@ class Declarations:
                 if decl.local:
                     self._hidden.setdefault(key, f"{decl.name} in module {decl.module} of "
                                                  f"{decl.source.filename} is LOCAL to that module")
-                elif first is not None:
+                    continue
+                self._global.setdefault(key, decl)
+                if first is not None:
                     ambiguous[key] = (f"{decl.name} is declared in module {first.module} of "
                                       f"{first.source.filename} and in module {decl.module} "
                                       f"of {decl.source.filename}")
@@ -116,6 +119,19 @@ class Declarations:
         for key, why in ambiguous.items():  # taken from neither
             del self._by_name[key]
             self._hidden[key] = why
+
+    def declared_twice(self, program: Program) -> list[str]:
+        """The program's own module-level global declarations that one of these modules
+        declares too, each as 'name (module M of file)': a task holding both does not
+        load on the controller."""
+        found = []
+        for decl in program.declarations:
+            if decl.routine is None and not decl.local:
+                other = self._global.get(decl.key)
+                if other is not None:
+                    found.append(f"{decl.name} (module {other.module} of "
+                                 f"{other.source.filename})")
+        return found
 
     def get(self, name: str, type_name: str) -> Any:
         """Typed value of a declaration of this type, or None."""

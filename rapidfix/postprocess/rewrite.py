@@ -51,7 +51,7 @@ from rapidfix.postprocess.path import MIN_PATH_TOLERANCE_MM
 from rapidfix.postprocess.plan import Plan
 from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
-from rapidfix.postprocess.resolve import Targets
+from rapidfix.postprocess.resolve import Declarations, Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
 from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 
@@ -279,6 +279,21 @@ def _foreign_call_warnings(program: Program) -> list[str]:
     return warnings
 
 
+def _declared_twice_warnings(program: Program, comp: Compensator) -> list[str]:
+    """One warning naming the program's global data that a module read for its data
+    (its task's other modules, the declaration files) declares too."""
+    if not comp.decls:
+        return []
+    twice = Declarations(comp.decls).declared_twice(program)
+    if not twice:
+        return []
+    shown = ", ".join(twice[:3]) + (f" and {len(twice) - 3} more" if len(twice) > 3 else "")
+    return [f"{program.filename}: {len(twice)} name(s) this program declares are declared "
+            f"by a module read for its data too: {shown}; the controller does not load a "
+            "task with a global name declared twice (this program's own declarations were "
+            "used)"]
+
+
 def _predicted_before(comp: Compensator, targets: Targets, p: Plan
                       ) -> tuple[float, float] | None:
     """The model's TCP error (mean, max, mm) of the compensated targets as the original
@@ -375,6 +390,7 @@ def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensato
                f"added, {len(skipped)} left as they were")
     notes, warnings, conditions = _run_statement(comp, planned, refined.solved, options)
     warnings.extend(_foreign_call_warnings(program))
+    warnings.extend(_declared_twice_warnings(program, comp))
     header = Header(
         version=__version__,
         model_path=comp.model_path,

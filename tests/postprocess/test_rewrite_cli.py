@@ -311,3 +311,39 @@ def test_a_program_failing_everywhere_lists_the_first_moves_and_counts_the_rest(
         "no solution on the branch its confdata … names …")
     assert reason_kind("joint 4 at 199.779° is outside [-200, 200] at p3_2") == (
         "joint … at …° is outside … at p3_2")
+
+
+@pytest.mark.parametrize(("own", "warned"), [
+    ("  PERS tooldata tBar:=[TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];", True),
+    ("  LOCAL PERS tooldata tBar:=[TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
+     False),
+])
+def test_a_name_the_program_and_a_declaration_file_both_declare_is_warned_of(
+        cell, tmp_path, capsys, own, warned):
+    """The controller does not load a task where two modules declare the same global
+    name; the program's own declaration is used, and a global one is warned of."""
+    prog = tmp_path / "station.mod"
+    prog.write_text(USES_OUTSIDE_DATA.replace("EXTAX", EXTAX).replace(
+        "MODULE Station\n", "MODULE Station\n" + own + "\n"))
+    decls = tmp_path / "base.sys"
+    decls.write_text(DECLS)
+    out = tmp_path / "out.mod"
+    code = main(["rewrite", str(prog), "--model", str(cell["model_path"]), "-o", str(out),
+                 "--decls", str(decls)])
+    err = capsys.readouterr().err
+    assert code == (3 if warned else 0)
+    assert (f"{prog}: 1 name(s) this program declares are declared by a module read for its "
+            f"data too: tBar (module BaseData of {decls}); the controller does not load"
+            in err) == warned
+    # the program's own tool (TCP z 90, not 100) was used either way: the same joints as
+    # without the file (its work object given by a file of its own)
+    wobj = tmp_path / "wobj.sys"
+    wobj.write_text(DECLS.replace("PERS tooldata tBar", "PERS tooldata tOther"))
+    alone = tmp_path / "alone.mod"
+    assert main(["rewrite", str(prog), "--model", str(cell["model_path"]), "-o", str(alone),
+                 "--decls", str(wobj)]) == 0
+
+    def joints(path):
+        return [line for line in path.read_text().splitlines() if "jointtarget jt_pA" in line]
+
+    assert joints(out) == joints(alone) and len(joints(out)) == 1
