@@ -544,8 +544,14 @@ _TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple]
 
 
 def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
-    """(node type, start, end, other fields) of the node _value_node makes."""
-    return _node_entry(_value_node(text, start), start)
+    """(node type, start, end, other fields) of the node _value_node makes. Each text is
+    read once: tails that differ (`v100\\V:=120`, `v100\\V:=135`) share their pieces."""
+    known = _ENTRIES.get(text)
+    if known is None:
+        known = _node_entry(_value_node(text, 0), 0)
+        _ENTRIES.keep(text, known)
+    kind, _, length, fields = known
+    return kind, start, start + length, fields
 
 
 def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
@@ -634,6 +640,8 @@ class CallTail:
 _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 _READ: Memo = Memo(TAIL_LIMIT)
+# The argument values of tails, read once per distinct text (see _value_entry).
+_ENTRIES: Memo = Memo(4 * TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.Statement]:

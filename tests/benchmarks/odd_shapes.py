@@ -17,6 +17,13 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                parentheses, between the moves
 - conditions:  IF / ELSEIF / WHILE heads with relations and logic, WaitUntil with
                conditions, a FUNC that RETURNs
+- feeds:       a robot-offline-programming post: `ConfL\\Off`, inline targets and inline
+               speeddata whose speed changes with every move, one move a line
+- tails:       named targets, every move with its own `\\V:=` and `\\Z:=` (no two tails alike)
+- five_axis:   targets whose orientation changes with every point (a tool tilted along
+               the surface), declared and inline
+- track:       a robot on a track: the first external axis changes with every target
+- remarks:     a comment after every statement on its line, declarations and moves
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -25,10 +32,16 @@ from __future__ import annotations
 
 import functools
 
-from program_shapes import _head, _robtarget, _targets
+import numpy as np
+from cam_program import ROBOT, ROT, TOOL, WOBJ, _frame, cam_positions
+from program_shapes import EXTAX, _head, _robtarget, _targets
+from scipy.spatial.transform import Rotation
+
+from rapidfix.kinematics import load_robot
 
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
-              "assign", "io", "loops", "failing", "records", "messages", "conditions")
+              "assign", "io", "loops", "failing", "records", "messages", "conditions",
+              "feeds", "tails", "five_axis", "track", "remarks")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -243,10 +256,72 @@ def _conditions(n: int) -> list[str]:
             "ENDMODULE"]
 
 
+def _feeds(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    moves = ["    ConfL\\Off;", "    ConfJ\\Off;"] + [
+        f"    MoveL {_robtarget(trans[k], confs[k])},[{20 + k % 97}.5,500,5000,1000],z1,"
+        "tMill,\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("Feeds"), *_parts(moves, 2000), "ENDMODULE"]
+
+
+def _tails(n: int) -> list[str]:
+    moves = [f"    MoveL p{k},v100\\V:={100 + k % 997},z1\\Z:={1 + k % 13},"
+             "tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("Tails"), *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
+@functools.lru_cache(maxsize=4)
+def _tilted(n: int) -> tuple[str, ...]:
+    """n reachable robtarget texts whose orientation turns from point to point."""
+    robot = load_robot(ROBOT)
+    k = np.arange(n)
+    tilt = Rotation.from_euler("xy", np.c_[np.radians(8 * np.sin(k * 0.05)),
+                                           np.radians(6 * np.cos(k * 0.03))])
+    w, x, y, z = ROT
+    rot = tilt * Rotation.from_quat([x, y, z, w])
+    target = np.tile(np.eye(4), (n, 1, 1))
+    target[:, :3, :3] = rot.as_matrix()
+    target[:, :3, 3] = cam_positions(n)
+    flange = _frame(*WOBJ) @ target @ np.linalg.inv(_frame(*TOOL))
+    q, status = robot.ik_nearest(flange, np.radians([[8, 28, 35, 20, -20, 12]]))
+    if not np.all(status == 0):  # pragma: no cover
+        raise RuntimeError("a generated target is out of reach")
+    quat = rot.as_quat()[:, [3, 0, 1, 2]]
+    conf = robot.confdata(q).tolist()
+    return tuple(f"[[{p[0]:.3f},{p[1]:.3f},{p[2]:.3f}],[{r[0]:.6f},{r[1]:.6f},{r[2]:.6f},"
+                 f"{r[3]:.6f}],[{c[0]},{c[1]},{c[2]},{c[3]}],[{EXTAX}]]"
+                 for p, r, c in zip(target[:, :3, 3].tolist(), quat.tolist(), conf))
+
+
+def _five_axis(n: int) -> list[str]:
+    targets = _tilted(n)
+    half = n // 2
+    decls = [f"  CONST robtarget p{k}:={targets[k]};" for k in range(half)]
+    moves = [f"    MoveL {f'p{k}' if k < half else targets[k]},v100,z1,tMill\\WObj:=wPlate;"
+             for k in range(n)]
+    return [*_head("FiveAxis"), *decls, *_parts(moves), "ENDMODULE"]
+
+
+def _track(n: int) -> list[str]:
+    decls = [line.replace(f"[{EXTAX}]", f"[{1000 + 0.5 * k:.1f},9E+09,9E+09,9E+09,9E+09,"
+                          "9E+09]") for k, line in enumerate(_decls(n))]
+    moves = [f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("Track"), *decls, *_parts(moves), "ENDMODULE"]
+
+
+def _remarks(n: int) -> list[str]:
+    decls = [f"{line} ! point {k}, pass {k // 600}" for k, line in enumerate(_decls(n))]
+    moves = [f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate; ! to point {k}; [x,y]"
+             for k in range(n)]
+    return [*_head("Remarks"), *decls, *_parts(moves), "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
-             "records": _records, "messages": _messages, "conditions": _conditions}
+             "records": _records, "messages": _messages, "conditions": _conditions,
+             "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
+             "remarks": _remarks}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -1,7 +1,7 @@
 """Benchmark: `rapidfix rewrite` on program shapes no other benchmark writes (issue 18).
 
 Run (RAPIDFIX_BENCH_ODD_LINES, default 20,000, is the larger size; the smaller is a
-quarter of it):
+quarter of it; RAPIDFIX_BENCH_ODD_SHAPES=feeds,tails picks shapes):
 
     OMP_NUM_THREADS=1 pytest tests/benchmarks/test_odd_shapes_speed.py -n 0 -s
 
@@ -24,11 +24,13 @@ from odd_shapes import ODD_SHAPES, odd_program
 from test_shapes_speed import _run_cli, model_path  # noqa: F401  (model_path: a fixture)
 
 LINES = int(os.environ.get("RAPIDFIX_BENCH_ODD_LINES", "20000"))
+ONLY = [s for s in os.environ.get("RAPIDFIX_BENCH_ODD_SHAPES", "").split(",") if s] or list(
+    ODD_SHAPES)
 
 
 def test_rewrite_odd_shapes(model_path, tmp_path):  # noqa: F811
     rows = []
-    for shape in ODD_SHAPES:
+    for shape in ONLY:
         suffix = ".prg" if shape == "modules" else ".mod"
         per_line = []
         for lines in (LINES // 4, LINES):
