@@ -9,6 +9,12 @@ character but line breaks becomes a space, so offsets, lines and columns stay).
 Inside a module item the LALR states do not depend on how many items came before
 (the parse table reaches the same state on the item's first keyword), so the plain
 grammar meets the same error, expects the same tokens and says the same.
+
+A long routine is windowed the same way inside: the declarations and statements of
+its body the parser had completed (it holds them on its stack) are blanked but the
+last, so the parser reaches the error in the state it had after them (a body of one
+item or of many: the same LALR state). A truncated CAM program, its one routine never
+closed, is then explained from its last statement, not read whole again.
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 # The first keyword of a module item at the start of a line: a routine (only ever a
@@ -30,6 +37,22 @@ _RECORD_END = re.compile(r"^[ \t]*(ENDRECORD)\b", re.I | re.M)
 _NOT_BREAK = re.compile(r"[^\r\n]+")
 # Below this many characters left out, the plain grammar may as well read it all.
 _WORTH = 20_000
+
+
+def body_span(err: UnexpectedInput) -> tuple[int, int] | None:
+    """(start of the first, start of the last) of the items of the routine body a
+    parser had completed when it met `err`, or None when it was not in a routine's
+    body or had completed fewer than two."""
+    interactive = getattr(err, "interactive_parser", None)
+    if interactive is None:
+        return None
+    for value in reversed(interactive.parser_state.value_stack):
+        if getattr(value, "data", "").startswith("___body_star"):
+            items = value.children
+            if len(items) < 2:
+                return None
+            return items[0].start, items[-1].start
+    return None
 
 
 @dataclass(frozen=True)
@@ -58,22 +81,56 @@ def _last(pattern: re.Pattern[str], text: str, start: int, end: int) -> int:
     return found
 
 
-def window(text: str, error_at: int) -> Window | None:
-    """The window for an error a parser met at `error_at` having read everything before
-    it, or None when too little would be left out.
+def window(text: str, err: UnexpectedInput) -> Window | None:
+    """The window for an error `err` a parser met having read everything before it, or
+    None when too little would be left out.
 
     The cut is the first keyword of the last module item that starts before the error
     (the parser took that keyword, so every item before it is complete): the last
     routine, or a declaration after it ends (module data). The blanked part starts on
-    the line after its module's `MODULE` line."""
+    the line after its module's `MODULE` line. The completed items of the routine the
+    error is in are blanked too, but the last (body_span)."""
+    error_at = error_offset(err, text)
     cut = _last(_ROUTINE, text, 0, error_at)
     ended = _last(_ROUTINE_END, text, max(cut, 0), error_at)
-    if cut < 0 or ended > cut:  # the error is in module data: cut at its declaration
+    in_routine = cut >= 0 and ended < 0
+    if not in_routine:  # the error is in module data: cut at its declaration
         cut = max(cut, _last(_DATA, text, max(ended, 0), error_at))
+    spans = []
+    module_span = _module_items(text, cut)
+    if module_span is not None and _took_keyword(err, cut):
+        spans.append(module_span)
+    body = body_span(err)
+    if body is not None and in_routine and cut < body[0] < body[1] < error_at:
+        spans.append(body)
+    if sum(end - start for start, end in spans) < _WORTH:
+        return None
+    out, at = [], 0
+    for start, end in spans:
+        out += [text[at:start], _NOT_BREAK.sub(lambda m: " " * len(m.group()), text[start:end])]
+        at = end
+    return Window("".join(out) + text[at:], at)
+
+
+def _took_keyword(err: UnexpectedInput, at: int) -> bool:
+    """Whether the parser holds, unreduced, the keyword it took at offset `at`: the first
+    keyword of the module item it was reading. A `VAR` at the start of a line inside a
+    declaration's value, read as a name, is no cut."""
+    interactive = getattr(err, "interactive_parser", None)
+    if interactive is None:
+        return False
+    return any(isinstance(value, Token) and value.start_pos == at
+               and value.type == value.upper()
+               for value in interactive.parser_state.value_stack)
+
+
+def _module_items(text: str, cut: int) -> tuple[int, int] | None:
+    """(after the MODULE line, cut): the module items before the cut, when they are
+    complete (the cut a module item's keyword), else None."""
     head = -1
     for match in _MODULE.finditer(text, 0, max(cut, 0)):
         head = match.end()
-    if cut < 0 or head < 0 or cut - head < _WORTH:
+    if cut < 0 or head < 0:
         return None
     # The contextual lexer reads PROC or VAR as a name where the keyword cannot stand
     # (a record's field type, a call's name in a routine): the cut is a module item only
@@ -82,8 +139,7 @@ def window(text: str, error_at: int) -> Window | None:
         if (sum(1 for _ in opening.finditer(text, head, cut))
                 != sum(1 for _ in closing.finditer(text, head, cut))):
             return None
-    blank = _NOT_BREAK.sub(lambda m: " " * len(m.group()), text[head:cut])
-    return Window(text[:head] + blank + text[cut:], cut)
+    return head, cut
 
 
 def confirms(window_err: UnexpectedInput, win: Window, error_at: int) -> bool:

@@ -964,11 +964,12 @@ def parse_text(text: str) -> s.SourceFile:
         return rapid_parser().parse(text)
     except UnexpectedInput as err:
         error_at = error_offset(err, text)
-        win = window(text, error_at)
+        win = window(text, err)
     if win is not None:
         try:
             rapid_parser().parse(win.text)
         except UnexpectedInput as err:
             if confirms(err, win, error_at):
+                err.rapidfix_window = win  # for syntax_errors.explain: read it again
                 raise
     return rapid_parser().parse(text)

@@ -136,7 +136,8 @@ def explain(source: SourceText, fallback: UnexpectedInput) -> RapidSyntaxError:
     the re-parse may read the error's window (rapid.error_window) instead of the file."""
     text = source.text
     error_at = error_offset(fallback, text)
-    win = window(text, error_at)
+    # the window the error was met in (fastpath.parse_text), else one worked out here
+    win = getattr(fallback, "rapidfix_window", None) or window(text, fallback)
     for candidate in ([win.text] if win is not None else []) + [text]:
         try:
             diagnosis_parser().parse(candidate)

@@ -1,8 +1,9 @@
 """A syntax error is explained from its error window (rapidfix.rapid.error_window): the
-module items before the one holding it blanked, so the plain grammar need not read a
-large file again. The message, line and column must be exactly those the plain grammar
-gives on the whole text: checked on the samples and benchmark shapes with errors put in
-at random places, with windows made however small (the size threshold set to 0)."""
+module items before the one holding it blanked, and the completed statements of the
+routine it is in but the last, so the plain grammar need not read a large file again.
+The message, line and column must be exactly those the plain grammar gives on the whole
+text: checked on the samples and benchmark shapes with errors put in at random places,
+with windows made however small (the size threshold set to 0)."""
 
 from __future__ import annotations
 
@@ -62,8 +63,8 @@ def test_the_error_window_says_what_the_whole_text_says(any_window, monkeypatch,
     text = base[:at] + insert + base[at + cut:]
     windowed = _outcome(text)
     with monkeypatch.context() as m:
-        m.setattr(fastpath, "window", lambda _text, _at: None)
-        m.setattr(syntax_errors, "window", lambda _text, _at: None)
+        m.setattr(fastpath, "window", lambda *_: None)
+        m.setattr(syntax_errors, "window", lambda *_: None)
         whole = _outcome(text)
     assert windowed == whole
 
@@ -92,16 +93,34 @@ def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch)
     assert "CONST robtarget" not in seen[0]  # the data section is blank
     line = text[:text.index("MoveL p1 v100")].count("\n") + 1
     assert f":{line}:" in str(windowed.value)
-    monkeypatch.setattr(fastpath, "window", lambda _text, _at: None)
-    monkeypatch.setattr(syntax_errors, "window", lambda _text, _at: None)
+    monkeypatch.setattr(fastpath, "window", lambda *_: None)
+    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
     with pytest.raises(RapidSyntaxError) as whole:
         parse_program(text, "t.mod")
     assert str(windowed.value) == str(whole.value)
 
 
 def test_no_window_when_little_would_be_left_out():
-    text = "MODULE M\n  PROC main()\n    MoveL p1 v100;\n  ENDPROC\nENDMODULE\n"
-    assert error_window.window(text, text.index("v100")) is None
+    from lark.exceptions import UnexpectedInput
+
+    text = "MODULE M\n  PROC main()\n    Stop;\n    MoveL p1 v100;\n  ENDPROC\nENDMODULE\n"
+    with pytest.raises(UnexpectedInput) as err:
+        fastpath.rapid_parser().parse(text)
+    assert error_window.window(text, err.value) is None
+
+
+def test_a_keyword_inside_a_value_is_no_cut(any_window, monkeypatch):
+    """Found by the property test: `VAR` at the start of a line inside a declaration's
+    aggregate is read as a name; the line is no module item, and the declaration it is
+    in must not be blanked (the plain grammar expects an operator there, not a name)."""
+    text = ("MODULE A\n  PROC r()\n    a:=1;\n  ENDPROC\n  TASK PERS num n:=1;\n"
+            "  LOCAL VAR num m{2}:=[1,\n  VAR  2];\nENDMODULE\n")
+    windowed = _outcome(text)
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "window", lambda *_: None)
+        m.setattr(syntax_errors, "window", lambda *_: None)
+        assert windowed == _outcome(text)
+    assert windowed.startswith("t.mod:7:8: unexpected '2'; expected one of an operator")
 
 
 @pytest.mark.parametrize("inside", [
@@ -117,7 +136,68 @@ def test_a_keyword_the_lexer_read_as_a_name_is_no_cut(any_window, monkeypatch, i
     text = head + inside + "ENDMODULE\n"
     windowed = _outcome(text)
     with monkeypatch.context() as m:
-        m.setattr(fastpath, "window", lambda _text, _at: None)
-        m.setattr(syntax_errors, "window", lambda _text, _at: None)
+        m.setattr(fastpath, "window", lambda *_: None)
+        m.setattr(syntax_errors, "window", lambda *_: None)
         assert windowed == _outcome(text)
     assert windowed.startswith("t.mod:")
+
+
+@pytest.mark.parametrize("damage", ["truncated", "in_if"])
+def test_an_error_late_in_a_long_routine_is_explained_from_its_last_statements(
+        monkeypatch, damage):
+    """A CAM program cut off in its one routine (no ENDPROC, no ENDMODULE), or with an
+    error inside an IF late in it: the plain grammar is given the routine with its
+    completed statements blank but the last, and says what it says on the whole text."""
+    import re
+
+    # one routine of 2,000 moves: the parts of the named shape run together
+    text = re.sub(r"\n  ENDPROC\n  PROC Path_\d+\(\)", "", shape_moves("named", 2000))
+    text = text[:text.index("  PROC main()")] + "ENDMODULE\n"
+    at = text.rindex("MoveL")
+    if damage == "truncated":
+        text = text[:at]
+    else:
+        text = (text[:at] + "IF nCount > 2 THEN\n      Stop;\n      MoveL p1 v100;\n    ENDIF\n    "
+                + text[at:])
+    seen: list[str] = []
+    plain = fastpath.rapid_parser()
+
+    class Spy:
+        def parse(self, given: str):
+            seen.append(given)
+            return plain.parse(given)
+
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "rapid_parser", lambda: Spy())
+        with pytest.raises(RapidSyntaxError) as windowed:
+            parse_program(text, "t.mod")
+    assert len(seen) == 1 and len(seen[0]) == len(text)
+    # the routine's statements blank but those of the last run the fast parser had taken
+    # (at most RUN_LIMIT) and the one before it; everything before the routine blank
+    routine = text.index("PROC ")
+    assert seen[0][:routine].split() == ["MODULE", "Named"]
+    assert text.count("MoveL", routine) > 2 * fastpath.RUN_LIMIT
+    assert seen[0].count("MoveL") <= fastpath.RUN_LIMIT + 2
+    monkeypatch.setattr(fastpath, "window", lambda *_: None)
+    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
+    with pytest.raises(RapidSyntaxError) as whole:
+        parse_program(text, "t.mod")
+    assert str(windowed.value) == str(whole.value)
+    assert ("unexpected end of file" in str(whole.value)) == (damage == "truncated")
+
+
+def test_the_body_of_a_routine_in_progress_is_read_from_the_parser():
+    """body_span: the first and last of the items a parser completed in the routine it
+    was reading (declarations and statements, an IF whole); None outside a routine."""
+    from lark.exceptions import UnexpectedInput
+
+    text = ("MODULE M\n  VAR num a:=1;\n  PROC main()\n    VAR num k;\n    IF a THEN\n"
+            "      b;\n    ENDIF\n    c := 1;\n    FOR i FROM 1 TO 3 DO\n      x;\n")
+    for parser in (fastpath.fast_parser(), fastpath.rapid_parser()):
+        with pytest.raises(UnexpectedInput) as err:
+            parser.parse(text)
+        assert error_window.body_span(err.value) == (text.index("VAR num k"),
+                                                      text.index("c := 1"))
+        with pytest.raises(UnexpectedInput) as err:
+            parser.parse("MODULE M\n  VAR num a:=1;\n  VAR num b:= ;\nENDMODULE\n")
+        assert error_window.body_span(err.value) is None
