@@ -22,8 +22,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from lark import Token
+from lark import Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+
+from rapidfix.rapid import syntax as s
 
 # The first keyword of a module item at the start of a line: a routine (only ever a
 # module item), or a data declaration (a module item when it is not inside a routine).
@@ -35,6 +37,8 @@ _MODULE = re.compile(r"^[ \t]*MODULE\b[^\r\n]*(?:\r\n|\r|\n)", re.I | re.M)
 _RECORD = re.compile(r"^[ \t]*(?:LOCAL[ \t]+)?(RECORD)\b", re.I | re.M)
 _RECORD_END = re.compile(r"^[ \t]*(ENDRECORD)\b", re.I | re.M)
 _NOT_BREAK = re.compile(r"[^\r\n]+")
+_PREFIXES = re.compile(r"(?:(?:LOCAL|TASK)\s+)*", re.I)
+_MODULE_ITEMS = (s.DataDecl, s.RecordDecl, s.AliasDecl, s.Routine)
 # Below this many characters left out, the plain grammar may as well read it all.
 _WORTH = 20_000
 
@@ -57,8 +61,10 @@ def body_span(err: UnexpectedInput) -> tuple[int, int] | None:
 
 @dataclass(frozen=True)
 class Window:
-    """`text` with the module items in [start, cut) blanked; `cut` is the offset of the
-    first keyword of the item the error is in (or after)."""
+    """`text` with the module items before the error's blanked, and the completed items
+    of the routine it is in but the last; `cut` is the end of the last blanked part (the
+    first keyword of the item the error is in or after, or the start of the routine's
+    last completed item)."""
 
     text: str
     cut: int
@@ -98,7 +104,7 @@ def window(text: str, err: UnexpectedInput) -> Window | None:
         cut = max(cut, _last(_DATA, text, max(ended, 0), error_at))
     spans = []
     module_span = _module_items(text, cut)
-    if module_span is not None and _took_keyword(err, cut):
+    if module_span is not None and _took_keyword(err, text, cut):
         spans.append(module_span)
     body = body_span(err)
     if body is not None and in_routine and cut < body[0] < body[1] < error_at:
@@ -112,16 +118,25 @@ def window(text: str, err: UnexpectedInput) -> Window | None:
     return Window("".join(out) + text[at:], at)
 
 
-def _took_keyword(err: UnexpectedInput, at: int) -> bool:
-    """Whether the parser holds, unreduced, the keyword it took at offset `at`: the first
-    keyword of the module item it was reading. A `VAR` at the start of a line inside a
-    declaration's value, read as a name, is no cut."""
+def _took_keyword(err: UnexpectedInput, text: str, at: int) -> bool:
+    """Whether the parser took the text at offset `at` as the first keyword of a module
+    item: it holds the keyword unreduced, or a completed item (after its LOCAL or TASK)
+    that starts there. A `VAR` at the start of a line inside a declaration's value, read
+    as a name, is no cut."""
     interactive = getattr(err, "interactive_parser", None)
     if interactive is None:
         return False
-    return any(isinstance(value, Token) and value.start_pos == at
-               and value.type == value.upper()
-               for value in interactive.parser_state.value_stack)
+    for value in interactive.parser_state.value_stack:
+        if isinstance(value, Token):
+            if value.start_pos == at and value.type == value.upper():
+                return True
+            continue
+        # a run of items (a star of the grammar, a run of fast declarations): its last
+        node = value.children[-1] if isinstance(value, Tree) and value.children else value
+        if (isinstance(node, _MODULE_ITEMS) and node.start <= at < node.end
+                and _PREFIXES.fullmatch(text, node.start, at)):
+            return True
+    return False
 
 
 def _module_items(text: str, cut: int) -> tuple[int, int] | None:

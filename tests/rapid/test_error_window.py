@@ -109,18 +109,49 @@ def test_no_window_when_little_would_be_left_out():
     assert error_window.window(text, err.value) is None
 
 
-def test_a_keyword_inside_a_value_is_no_cut(any_window, monkeypatch):
+@pytest.mark.parametrize(("value", "message"), [
+    ("[1,\n  VAR  2]", "t.mod:7:8: unexpected '2'; expected one of an operator"),
+    ("[1,\n  VAR, 2 3]", "t.mod:7:10: unexpected '3'; expected one of an operator"),
+    ("[1,\n  VAR];\n  VAR num k:= ;", "t.mod:8:15: unexpected ';'; expected one of "),
+])
+def test_a_keyword_inside_a_value_is_no_cut(any_window, monkeypatch, value, message):
     """Found by the property test: `VAR` at the start of a line inside a declaration's
     aggregate is read as a name; the line is no module item, and the declaration it is
     in must not be blanked (the plain grammar expects an operator there, not a name)."""
     text = ("MODULE A\n  PROC r()\n    a:=1;\n  ENDPROC\n  TASK PERS num n:=1;\n"
-            "  LOCAL VAR num m{2}:=[1,\n  VAR  2];\nENDMODULE\n")
+            f"  LOCAL VAR num m{{2}}:={value}\nENDMODULE\n")
     windowed = _outcome(text)
     with monkeypatch.context() as m:
         m.setattr(fastpath, "window", lambda *_: None)
         m.setattr(syntax_errors, "window", lambda *_: None)
         assert windowed == _outcome(text)
-    assert windowed.startswith("t.mod:7:8: unexpected '2'; expected one of an operator")
+    assert windowed.startswith(message)
+
+
+def test_an_error_after_complete_declarations_is_explained_from_the_last(monkeypatch):
+    """A stray statement among a CAM program's declarations: the declarations before
+    the last complete one are blank in what the plain grammar is given."""
+    text = shape_moves("named", 3000)
+    at = text.index("  CONST robtarget p2000")
+    text = text[:at] + "  x := 1;\n" + text[at:]
+    seen: list[str] = []
+    plain = fastpath.rapid_parser()
+
+    class Spy:
+        def parse(self, given: str):
+            seen.append(given)
+            return plain.parse(given)
+
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "rapid_parser", lambda: Spy())
+        with pytest.raises(RapidSyntaxError) as windowed:
+            parse_program(text, "t.mod")
+    assert len(seen) == 1 and seen[0].count("CONST robtarget") == 1001  # p1999 .. p2999
+    monkeypatch.setattr(fastpath, "window", lambda *_: None)
+    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
+    with pytest.raises(RapidSyntaxError) as whole:
+        parse_program(text, "t.mod")
+    assert str(windowed.value) == str(whole.value)
 
 
 @pytest.mark.parametrize("inside", [
