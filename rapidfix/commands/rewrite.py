@@ -14,8 +14,7 @@ from rapidfix.exceptions import InvalidOption, RapidfixError, UsageError
 from rapidfix.paths import check_output_file
 
 if TYPE_CHECKING:
-    from rapidfix.postprocess import RewriteOptions
-    from rapidfix.postprocess.rewrite import Skipped
+    from rapidfix.postprocess import RewriteOptions, Skipped
 
 
 def add_common_options(parser: argparse.ArgumentParser) -> None:

@@ -27,7 +27,13 @@ from typing import TYPE_CHECKING
 
 from rapidfix import lazy_exports
 from rapidfix.postprocess.compensator import Compensator
-from rapidfix.postprocess.rewrite import RewriteOptions, RewriteResult, rewrite_file, rewrite_source
+from rapidfix.postprocess.rewrite import (
+    RewriteOptions,
+    RewriteResult,
+    Skipped,
+    rewrite_file,
+    rewrite_source,
+)
 
 if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.postprocess.batch import RAPID_SUFFIXES, BatchSettings, run_batch, write_summary
@@ -58,6 +64,7 @@ __all__ = [
     "Execution",
     "RewriteOptions",
     "RewriteResult",
+    "Skipped",
     "align_axis1",
     "commanded_motions",
     "modules_beside",
