@@ -580,10 +580,11 @@ class ModelBuilder:
         motion, declaration, global_names = MotionInstruction, Declaration, self.global_names
         # (instruction, module, routine) -> per required position: (parameter key,
         # type hint, operand cache: data name as spelt -> what an Operand of it holds),
-        # and id(call tail) -> what its moves share (None: nothing); the calls keep
-        # their tails alive while this runs, so an id is not reused
+        # and id(call tail) -> what its moves share (None: nothing; a tuple: the first
+        # call's operands, until a second call has the tail); the calls keep their tails
+        # alive while this runs, so an id is not reused
         layouts: dict[tuple[MotionSpec, str, str],
-                      tuple[_Layout, dict[int, _SharedTail | None]]] = {}
+                      tuple[_Layout, dict[object, _SharedTail | tuple | None]]] = {}
         caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
@@ -612,10 +613,13 @@ class ModelBuilder:
                 # (the same tail after one leading argument or after two is shared apart)
                 tail = id(call.tail) if call.second is None else (id(call.tail), 2)
                 shared = shared_tails.get(tail, False)
-                if shared is False:  # the first call with this tail: made in full
+                if type(shared) is tuple:  # the second call with this tail: share it now
+                    shared = shared_tails[tail] = self._shared_tail(*shared)
+                if shared is False:  # the first call with this tail: made in full (a
+                    # tail that never recurs, `\V:=` on every move, is not shared at all)
                     arguments, optional = operands(call, layout, module, rkey)
-                    shared = shared_tails[tail] = self._shared_tail(
-                        call, spec, layout, arguments, optional)
+                    shared_tails[tail] = (call, spec, layout, arguments, optional)
+                    shared = None
                 elif shared is not None:
                     if call.second is None:  # the usual case: one target
                         expr = head.value
