@@ -8,6 +8,9 @@ that the parser's speed and equivalence hold on layouts it was not tuned on:
 - nested:     Offs(RelTool(p, ...), ...) nested calls, RelTool with \\Rz
 - inside:     comments inside statements, statements split over lines
 - calls:      several routines with parameters calling each other, moves to parameters
+- mixed:      issue 18's mixed program: half named, a quarter inline, a quarter
+              `Offs(p,0,0,0)`, MoveJ/MoveL, `\\WObj`, a comment every 50 moves, CRLF,
+              `%%%` header
 
 `more_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -19,7 +22,7 @@ import functools
 from program_shapes import _head, _robtarget, _targets
 
 MORE_SHAPES = ("var_pers", "inline_exp", "absj", "arrays", "trigg", "nested", "inside",
-               "calls")
+               "calls", "mixed")
 PER_PROC = 400
 
 
@@ -158,9 +161,25 @@ def _calls(n: int) -> list[str]:
             "ENDMODULE"]
 
 
+def _mixed(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    decls = [f"  CONST robtarget p{k}:={_robtarget(trans[k], confs[k])};"
+             for k in range(n) if k % 4 != 2]
+    moves = []
+    for k in range(n):
+        if k % 50 == 0:
+            moves.append(f"    ! pass {k // 50}")
+        target = (f"p{k}", f"p{k}", _robtarget(trans[k], confs[k]), f"Offs(p{k},0,0,0)")[k % 4]
+        moves.append(f"    {'MoveJ' if k % 10 == 0 else 'MoveL'} {target}, v100, z1, "
+                     "tMill\\WObj:=wPlate;")
+    lines = ["%%%", "  VERSION:1", "  LANGUAGE:ENGLISH", "%%%", *_head("Mixed"), *decls,
+             *_procs(moves, 500), "ENDMODULE"]
+    return [line + "\r" for line in lines]  # CRLF, as RobotStudio writes
+
+
 _BUILDERS = {"var_pers": _var_pers, "inline_exp": _inline_exp, "absj": _absj,
              "arrays": _arrays, "trigg": _trigg, "nested": _nested, "inside": _inside,
-             "calls": _calls}
+             "calls": _calls, "mixed": _mixed}
 
 
 def more_moves(shape: str, n_moves: int) -> str:
