@@ -13,6 +13,7 @@ import json
 import os
 import re
 import signal
+import stat
 import sys
 import threading
 import time
@@ -286,6 +287,9 @@ def run_batch(
             )
     found = discover(src_root)
     files = [f for f in found if is_rapid(f)] if settings.in_place else found
+    special = {f for f in files if _special(src_root / f)}
+    found = [f for f in found if f not in special]
+    files = [f for f in files if f not in special]
     # fail early, once, on a bad model or robot instead of once per file
     _compensator(settings)
     neighbours = task_neighbours(found, src_root) if settings.task_modules else {}
@@ -293,16 +297,34 @@ def run_batch(
         jobs = [(str(src_root / f), str(dst_root / f), f.as_posix(), settings,
                  tuple((str(src_root / n), read_from(n)) for n in neighbours.get(f, ())))
                 for f in files]
-        return _run_jobs(jobs, workers, progress, on_result)
+        left = [FileOutcome(f.as_posix(), "error", message=f"{src_root / f}: not a regular "
+                            "file (a named pipe, a socket or a device): left alone")
+                for f in sorted(special)]
+        return _run_jobs(jobs, workers, progress, on_result, left)
+
+
+def _special(path: Path) -> bool:
+    """Whether `path` is a named pipe, a socket or a device: reading one may wait for
+    ever (a pipe nobody writes to). A path that cannot be looked at is not: its job
+    reports why."""
+    try:
+        return not stat.S_ISREG(path.stat().st_mode)
+    except OSError:
+        return False
 
 
 def _run_jobs(jobs: list[_Job], workers: int | None, progress: bool,
-              on_result: Callable[[FileOutcome], None] | None) -> BatchSummary:
-    """Run the batch's jobs (in parallel when there are several workers)."""
+              on_result: Callable[[FileOutcome], None] | None,
+              outcomes: list[FileOutcome] | None = None) -> BatchSummary:
+    """Run the batch's jobs (in parallel when there are several workers); `outcomes`
+    holds the files already decided."""
     # largest files first, so no worker is left with a big one at the end
     jobs.sort(key=lambda job: -_size(Path(job[0])))
     workers = max(1, workers if workers is not None else (os.cpu_count() or 1))
-    outcomes: list[FileOutcome] = []
+    outcomes = list(outcomes or [])
+    if on_result is not None:
+        for outcome in outcomes:
+            on_result(outcome)
     bar = _progress(len(jobs), progress)
     try:
         if workers == 1 or len(jobs) <= 1:

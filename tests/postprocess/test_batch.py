@@ -162,3 +162,49 @@ def test_the_summary_keeps_every_warning_of_a_file(cell, tmp_path):
     assert any("CRobT" in line or "pHere" in line for line in entry["skipped"])
     assert any(w.startswith("seam.mod:9:5: Search_1D is not a motion instruction")
                for w in entry["warnings"]), entry["warnings"]
+
+
+def test_a_named_pipe_in_the_folder_is_left_alone_not_waited_on(cell, samples, tmp_path):
+    """A pipe nobody writes to would block a read for ever: the batch names it as a file
+    it left alone and rewrites the others (in two workers and in one, out of place and in
+    place); a pipe among a task's modules lends nothing either (an alarm fails the test
+    instead of letting it wait)."""
+    import os
+    import signal
+
+    src = make_tree(tmp_path / "in", samples)
+    os.mkfifo(src / "cell" / "waiting.mod")
+    os.mkfifo(src / "pipe.txt")
+    task = src / "RAPID" / "TASK1" / "PROGMOD"
+    task.mkdir(parents=True)
+    shutil.copy(samples / "ballbar.mod", task / "main.mod")
+    os.mkfifo(task / "data.sys")
+
+    def waited(*_):
+        raise TimeoutError("the batch waited on a named pipe")
+
+    previous = signal.signal(signal.SIGALRM, waited)
+    signal.alarm(120)
+    try:
+        settings = BatchSettings(str(cell["model_path"]), None, None, (), RewriteOptions())
+        for workers in (2, 1):
+            summary = run_batch(src, tmp_path / f"out{workers}", settings, workers=workers,
+                                progress=False)
+            status = {f.path: f.status for f in summary.files}
+            assert status["cell/sub/good.mod"] == "ok" and status["notes.txt"] == "copied"
+            assert status["RAPID/TASK1/PROGMOD/main.mod"] == "ok"
+            assert (status["cell/waiting.mod"] == status["pipe.txt"]
+                    == status["RAPID/TASK1/PROGMOD/data.sys"] == "error")
+            waiting = next(f for f in summary.files if f.path == "cell/waiting.mod")
+            assert waiting.message.endswith("waiting.mod: not a regular file (a named pipe, "
+                                            "a socket or a device): left alone")
+            assert not (tmp_path / f"out{workers}" / "pipe.txt").exists()
+        in_place = BatchSettings(str(cell["model_path"]), None, None, (), RewriteOptions(),
+                                 in_place=True)
+        summary = run_batch(src, None, in_place, workers=1, progress=False)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    status = {f.path: f.status for f in summary.files}
+    assert status["cell/waiting.mod"] == "error" and status["cell/sub/good.mod"] == "ok"
+    assert "pipe.txt" not in status  # in place: RAPID files only
