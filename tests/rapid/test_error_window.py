@@ -47,6 +47,29 @@ def _outcome(text: str) -> str:
     return f"ok {len(program.motions)} {len(program.declarations)}"
 
 
+def _windowed_and_whole(text: str, monkeypatch) -> tuple[list[str], str, str]:
+    """(the texts the plain grammar was given, the error message, the message with no
+    window) of a program with a syntax error."""
+    seen: list[str] = []
+    plain = fastpath.rapid_parser()
+
+    class Spy:
+        def parse(self, given: str):
+            seen.append(given)
+            return plain.parse(given)
+
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "rapid_parser", lambda: Spy())
+        with pytest.raises(RapidSyntaxError) as windowed:
+            parse_program(text, "t.mod")
+    with monkeypatch.context() as m:
+        m.setattr(fastpath, "window", lambda *_: None)
+        m.setattr(syntax_errors, "window", lambda *_: None)
+        with pytest.raises(RapidSyntaxError) as whole:
+            parse_program(text, "t.mod")
+    return seen, str(windowed.value), str(whole.value)
+
+
 @pytest.fixture
 def any_window(monkeypatch):
     monkeypatch.setattr(error_window, "_WORTH", 0)
@@ -75,29 +98,14 @@ def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch)
     text = shape_moves("named", 1500)  # three routines
     at = text.rindex("MoveL")
     text = text[:at] + "MoveL p1 v100, z1, tMill;\n    " + text[at:]
-    seen: list[str] = []
-    plain = fastpath.rapid_parser()
-
-    class Spy:
-        def parse(self, given: str):
-            seen.append(given)
-            return plain.parse(given)
-
-    with monkeypatch.context() as m:
-        m.setattr(fastpath, "rapid_parser", lambda: Spy())
-        with pytest.raises(RapidSyntaxError) as windowed:
-            parse_program(text, "t.mod")
+    seen, windowed, whole = _windowed_and_whole(text, monkeypatch)
     assert len(seen) == 1 and len(seen[0]) == len(text)
     kept = seen[0].replace(" ", "").replace("\n", "")
     assert len(kept) < len(text.replace(" ", "").replace("\n", "")) / 4
     assert "CONST robtarget" not in seen[0]  # the data section is blank
     line = text[:text.index("MoveL p1 v100")].count("\n") + 1
-    assert f":{line}:" in str(windowed.value)
-    monkeypatch.setattr(fastpath, "window", lambda *_: None)
-    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
-    with pytest.raises(RapidSyntaxError) as whole:
-        parse_program(text, "t.mod")
-    assert str(windowed.value) == str(whole.value)
+    assert f":{line}:" in windowed
+    assert windowed == whole
 
 
 def test_no_window_when_little_would_be_left_out():
@@ -134,24 +142,9 @@ def test_an_error_after_complete_declarations_is_explained_from_the_last(monkeyp
     text = shape_moves("named", 3000)
     at = text.index("  CONST robtarget p2000")
     text = text[:at] + "  x := 1;\n" + text[at:]
-    seen: list[str] = []
-    plain = fastpath.rapid_parser()
-
-    class Spy:
-        def parse(self, given: str):
-            seen.append(given)
-            return plain.parse(given)
-
-    with monkeypatch.context() as m:
-        m.setattr(fastpath, "rapid_parser", lambda: Spy())
-        with pytest.raises(RapidSyntaxError) as windowed:
-            parse_program(text, "t.mod")
+    seen, windowed, whole = _windowed_and_whole(text, monkeypatch)
     assert len(seen) == 1 and seen[0].count("CONST robtarget") == 1001  # p1999 .. p2999
-    monkeypatch.setattr(fastpath, "window", lambda *_: None)
-    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
-    with pytest.raises(RapidSyntaxError) as whole:
-        parse_program(text, "t.mod")
-    assert str(windowed.value) == str(whole.value)
+    assert windowed == whole
 
 
 @pytest.mark.parametrize("inside", [
@@ -190,18 +183,7 @@ def test_an_error_late_in_a_long_routine_is_explained_from_its_last_statements(
     else:
         text = (text[:at] + "IF nCount > 2 THEN\n      Stop;\n      MoveL p1 v100;\n    ENDIF\n    "
                 + text[at:])
-    seen: list[str] = []
-    plain = fastpath.rapid_parser()
-
-    class Spy:
-        def parse(self, given: str):
-            seen.append(given)
-            return plain.parse(given)
-
-    with monkeypatch.context() as m:
-        m.setattr(fastpath, "rapid_parser", lambda: Spy())
-        with pytest.raises(RapidSyntaxError) as windowed:
-            parse_program(text, "t.mod")
+    seen, windowed, whole = _windowed_and_whole(text, monkeypatch)
     assert len(seen) == 1 and len(seen[0]) == len(text)
     # the routine's statements blank but those of the last run the fast parser had taken
     # (at most RUN_LIMIT) and the one before it; everything before the routine blank
@@ -209,12 +191,8 @@ def test_an_error_late_in_a_long_routine_is_explained_from_its_last_statements(
     assert seen[0][:routine].split() == ["MODULE", "Named"]
     assert text.count("MoveL", routine) > 2 * fastpath.RUN_LIMIT
     assert seen[0].count("MoveL") <= fastpath.RUN_LIMIT + 2
-    monkeypatch.setattr(fastpath, "window", lambda *_: None)
-    monkeypatch.setattr(syntax_errors, "window", lambda *_: None)
-    with pytest.raises(RapidSyntaxError) as whole:
-        parse_program(text, "t.mod")
-    assert str(windowed.value) == str(whole.value)
-    assert ("unexpected end of file" in str(whole.value)) == (damage == "truncated")
+    assert windowed == whole
+    assert ("unexpected end of file" in whole) == (damage == "truncated")
 
 
 def test_the_body_of_a_routine_in_progress_is_read_from_the_parser():
