@@ -818,9 +818,10 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
 
 
 def forget_texts() -> None:
-    """Empty the texts the fast path keeps across files (call tails, aggregate rests and
-    number groups): their memory back, and the next file read from a known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _RESTS, _GROUP_CACHE):
+    """Empty the texts the fast path keeps across files (call tails and their values,
+    aggregate rests and number groups): their memory back, and the next file read from a
+    known start."""
+    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _RESTS, _GROUP_CACHE):
         memo.clear()
 
 

@@ -232,3 +232,16 @@ ENDMODULE
     calls = [m.target for m in program.motions if m.target.form in ("offs", "reltool")]
     assert sum(t.static for t in calls) >= 5 and sum(not t.static for t in calls) >= 5
     assert any(isinstance(m.syntax.args[0].value, s.LazyFunctionCall) for m in program.motions)
+
+
+def test_forgetting_the_texts_empties_every_memo_the_fast_path_keeps():
+    """forget_texts gives back the memory of every text kept across files (tails, their
+    values, expressions, aggregate rests, number groups)."""
+    from rapidfix.rapid import fastpath
+
+    memos = [value for value in vars(fastpath).values() if isinstance(value, fastpath.Memo)]
+    assert len(memos) >= 6
+    parse_text(CELL.replace("v100,z1", "v100\\V:=120,z1") + "\n")
+    assert fastpath._TAILS and fastpath._ENTRIES  # tails and their values were kept
+    forget_texts()
+    assert not any(memos)
