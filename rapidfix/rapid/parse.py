@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import sys
+from collections import namedtuple
 from pathlib import Path
 
 from lark.exceptions import UnexpectedInput
 
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.fastpath import fast_parser, parse_text
 from rapidfix.rapid.grammar import rapid_parser
 from rapidfix.rapid.model_builder import build_program
 from rapidfix.rapid.program import Program
@@ -25,6 +26,31 @@ _MANY_OBJECTS = 100_000
 #: process that reads more (a large file, a batch) builds it once and keeps it.
 WARM_UP_CHARS = 20_000
 _read_plain = 0  # characters this process has read with the plain grammar so far
+
+
+def parse_text(text: str) -> s.SourceFile:
+    """The fast route (rapidfix.rapid.fastpath.parse_text), imported when first taken: a
+    command on one small file never imports the fast path (its patterns, 20 ms)."""
+    from rapidfix.rapid.fastpath import parse_text as fast_route
+
+    return fast_route(text)
+
+
+_CacheInfo = namedtuple("_CacheInfo", "currsize")
+
+
+class _FastParser:
+    """Whether fastpath.fast_parser has been built (its cache), asked without importing
+    the fast path."""
+
+    @staticmethod
+    def cache_info() -> _CacheInfo:
+        fastpath = sys.modules.get("rapidfix.rapid.fastpath")
+        return (_CacheInfo(0) if fastpath is None
+                else _CacheInfo(fastpath.fast_parser.cache_info().currsize))
+
+
+fast_parser = _FastParser()
 
 
 def parse_source(source: SourceText) -> s.SourceFile:

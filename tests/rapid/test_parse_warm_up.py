@@ -104,3 +104,18 @@ def test_a_syntax_error_reads_the_same_on_both_routes(routes, monkeypatch):
     assert routes["fast"]
     assert str(plain.value) == str(fast.value)
     assert str(plain.value).startswith("small.mod:6:")
+
+
+def test_a_small_file_in_a_fresh_process_does_not_import_the_fast_path():
+    """The fast path's module (its patterns) is imported only when a file takes it."""
+    import subprocess
+
+    code = ("import sys\nfrom rapidfix.rapid import parse_program\n"
+            f"program = parse_program({SMALL!r}, 'small.mod')\n"
+            "print(len(program.motions), 'rapidfix.rapid.fastpath' in sys.modules)\n"
+            "parse_program('MODULE L\\n  PROC main()\\n' + '    x:=1;\\n' * 5000\n"
+            "              + '  ENDPROC\\nENDMODULE\\n')\n"
+            "print('rapidfix.rapid.fastpath' in sys.modules)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.split() == ["2", "False", "True"]
