@@ -80,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     name = args.name or source.name
     if args.baud <= 0 or args.timeout <= 0 or args.retries < 0 or args.window < 1:
         raise LinkError("--baud, --timeout and --window must be positive, --retries not negative")
+    if args.load:
+        _check_loadable(source)
     if args.dry_run:
         return _dry_run(source, name, args)
     settings = LinkSettings(timeout=args.timeout, retries=args.retries, window=args.window)
@@ -95,6 +97,22 @@ def run(args: argparse.Namespace) -> int:
     result = upload_file(source, args.port, args.baud, name, args.load, settings, progress)
     _report(result, args.port, args.baud)
     return 0
+
+
+def _check_loadable(source: Path) -> None:
+    """Refuse, before a byte is sent, a module the controller's Load would refuse for its
+    syntax: at 9,600 baud a large program takes many minutes on the line."""
+    from rapidfix.exceptions import RapidSyntaxError
+    from rapidfix.rapid import load_program
+
+    try:
+        load_program(source)
+    except RapidSyntaxError as err:
+        err.hint = ("nothing was sent: the controller would not load it; fix it, or send it "
+                    "without --load")
+        raise
+    except OSError as err:
+        raise LinkError(f"cannot read {source}: {err.strerror or err}", file=source) from None
 
 
 def _dry_run(source: Path, name: str, args: argparse.Namespace) -> int:

@@ -5,7 +5,7 @@ import argparse
 import pytest
 
 from rapidfix.commands import upload
-from rapidfix.exceptions import LinkError
+from rapidfix.exceptions import LinkError, RapidSyntaxError
 
 
 def run(argv):
@@ -72,6 +72,14 @@ def test_load_on_the_simulated_controller_uses_the_rapid_grammar(tmp_path, capsy
     disk = tmp_path / "controller"
     assert run([str(good), "--simulate", str(disk), "--load"]) == 0
     assert "loaded" in capsys.readouterr().out
-    with pytest.raises(LinkError, match="Load refused"):
+    # a module the controller would not load is refused before a byte is sent (the
+    # controller's own refusal: test_upload_pty), with the syntax error's place
+    with pytest.raises(RapidSyntaxError, match=r"BAD.mod:4:1: unexpected end of file") as err:
         run([str(bad), "--simulate", str(disk), "--load"])
-    assert (disk / "BAD.mod").read_bytes() == bad.read_bytes()  # verified, in place, not loaded
+    assert "nothing was sent" in err.value.hint
+    assert not (disk / "BAD.mod").exists()
+    with pytest.raises(RapidSyntaxError):
+        run([str(bad), "--dry-run", "--load"])
+    # without --load any file is sent as it is (a module still being written)
+    assert run([str(bad), "--simulate", str(disk)]) == 0
+    assert (disk / "BAD.mod").read_bytes() == bad.read_bytes()
