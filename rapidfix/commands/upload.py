@@ -103,23 +103,26 @@ def _check_loadable(source: Path) -> None:
     """Refuse, before a byte is sent, a module the controller's Load would refuse for its
     syntax: at 9,600 baud a large program takes many minutes on the line."""
     from rapidfix.exceptions import RapidSyntaxError
-    from rapidfix.rapid import load_program
+    from rapidfix.rapid import parse_program
 
     try:
-        load_program(source)
+        parse_program(_read(source), str(source))
     except RapidSyntaxError as err:
         err.hint = ("nothing was sent: the controller would not load it; fix it, or send it "
                     "without --load")
         raise
+
+
+def _read(source: Path) -> bytes:
+    """The bytes of the file to send (a LinkError naming it when it cannot be read)."""
+    try:
+        return source.read_bytes()
     except OSError as err:
         raise LinkError(f"cannot read {source}: {err.strerror or err}", file=source) from None
 
 
 def _dry_run(source: Path, name: str, args: argparse.Namespace) -> int:
-    try:
-        data = source.read_bytes()
-    except OSError as err:
-        raise LinkError(f"cannot read {source}: {err.strerror or err}", file=source) from None
+    data = _read(source)
     plan = plan_upload(data, name, args.load)
     overhead = plan.wire_bytes - plan.size
     print(

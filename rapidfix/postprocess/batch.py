@@ -33,6 +33,7 @@ from rapidfix.postprocess.header import read_header
 from rapidfix.postprocess.rewrite import RewriteOptions, header_options, rewrite_file
 from rapidfix.postprocess.task_modules import (
     RAPID_SUFFIXES,
+    is_rapid,
     task_neighbours,
     task_snapshot,
     with_task_modules,
@@ -139,11 +140,6 @@ def _size(path: Path) -> int:
         return path.stat().st_size
     except OSError:
         return 0
-
-
-def is_rapid(path: Path) -> bool:
-    """True for the file kinds the post-processor rewrites."""
-    return path.suffix.lower() in RAPID_SUFFIXES
 
 
 _CACHE: dict[BatchSettings, Compensator] = {}

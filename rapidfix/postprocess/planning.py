@@ -33,7 +33,8 @@ class ProgramPlan:
     conditions; `solved` the solved and compensated targets; `mode` each compensated
     site's emission mode, 'joint' (MoveAbsJ) or 'filtered' (a filtered robtarget);
     `approach` the arrival direction (6,) of each site given an approach point and
-    `approach_margin` how far (rad, per joint) the approach points stand off.
+    `approach_margin` how far (rad, per joint) the approach points stand off;
+    `outside` the data of the other modules it was resolved against.
     """
 
     sites: list[Site]
@@ -43,6 +44,7 @@ class ProgramPlan:
     mode: dict[int, str]
     approach: dict[int, np.ndarray] = field(default_factory=dict)
     approach_margin: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    outside: Declarations = field(default_factory=lambda: Declarations([]))
 
 
 def is_fine(program: Program, motion: MotionInstruction) -> bool:
@@ -86,7 +88,7 @@ def plan_program(program: Program, comp: Compensator, emit: str, *,
     joint_kinds = "LJC" if emit == "jointtargets" else ""
     mode = {i: "joint" if site.kind in joint_kinds and site.kept is None else "filtered"
             for i, site in enumerate(sites) if site.reason is None}
-    return ProgramPlan(sites, targets, conditions, solved, mode, approach_dir, margin)
+    return ProgramPlan(sites, targets, conditions, solved, mode, approach_dir, margin, outside)
 
 
 def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targets: Targets,

@@ -279,12 +279,10 @@ def _foreign_call_warnings(program: Program) -> list[str]:
     return warnings
 
 
-def _declared_twice_warnings(program: Program, comp: Compensator) -> list[str]:
+def _declared_twice_warnings(program: Program, outside: Declarations) -> list[str]:
     """One warning naming the program's global data that a module read for its data
     (its task's other modules, the declaration files) declares too."""
-    if not comp.decls:
-        return []
-    twice = Declarations(comp.decls).declared_twice(program)
+    twice = outside.declared_twice(program)
     if not twice:
         return []
     shown = ", ".join(twice[:3]) + (f" and {len(twice) - 3} more" if len(twice) > 3 else "")
@@ -390,7 +388,7 @@ def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensato
                f"added, {len(skipped)} left as they were")
     notes, warnings, conditions = _run_statement(comp, planned, refined.solved, options)
     warnings.extend(_foreign_call_warnings(program))
-    warnings.extend(_declared_twice_warnings(program, comp))
+    warnings.extend(_declared_twice_warnings(program, planned.outside))
     header = Header(
         version=__version__,
         model_path=comp.model_path,

@@ -31,6 +31,11 @@ _MODULE_DIRS = frozenset({"PROGMOD", "SYSMOD"})
 RAPID_SUFFIXES = (".mod", ".modx", ".prg", ".sys")
 
 
+def is_rapid(path: PurePath) -> bool:
+    """True for the file kinds that hold RAPID modules (and that a batch rewrites)."""
+    return path.suffix.lower() in RAPID_SUFFIXES
+
+
 def task_folder(rel: PurePath) -> PurePath | None:
     """The task folder of a module file: the folder above the `PROGMOD` or `SYSMOD`
     folder it lies in, or the `RAPID/TASK<n>` folder it lies in itself; None for a file
@@ -52,11 +57,11 @@ def task_neighbours(files: Sequence[PurePath], root: Path | None = None
     groups: dict[object, set[PurePath]] = {}
     for rel in files:
         folder = task_folder(rel)
-        if folder is not None and rel.suffix.lower() in RAPID_SUFFIXES:
+        if folder is not None and is_rapid(rel):
             groups.setdefault(folder, set()).add(rel)
     if root is not None:
         present = {(rel.parent, rel.name.lower()): rel for rel in files
-                   if rel.suffix.lower() in RAPID_SUFFIXES}
+                   if is_rapid(rel)}
         for rel in files:
             if rel.suffix.lower() == ".pgf":
                 listed = {present.get((rel.parent, name.lower()))
@@ -104,7 +109,7 @@ def modules_beside(path: Path) -> tuple[Path, list[Path]] | None:
         places = [task, *(d for d in task.iterdir()
                           if d.is_dir() and d.name.upper() in _MODULE_DIRS)]
         modules = sorted(f for place in places for f in place.iterdir()
-                         if f.is_file() and f.suffix.lower() in RAPID_SUFFIXES and f != real
+                         if f.is_file() and is_rapid(f) and f != real
                          and not (f.name.startswith(".") and f.name.endswith(".tmp"))
                          and task_folder(PurePath(f)) == folder)
     except OSError:  # a folder that cannot be listed lends nothing
@@ -124,7 +129,7 @@ def _program_beside(real: Path) -> tuple[Path, list[Path]] | None:
         listed = {n.lower() for n in program_modules(pgf)}
         if name in listed:
             modules.update(f for f in beside if f.name.lower() in listed and f != real
-                           and f.suffix.lower() in RAPID_SUFFIXES)
+                           and is_rapid(f))
     return (real.parent, sorted(modules)) if modules else None
 
 
@@ -186,5 +191,5 @@ def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> 
     return replace(comp, decls=[*comp.decls, *programs], decl_paths=[*comp.decl_paths, *used])
 
 
-__all__ = ["RAPID_SUFFIXES", "modules_beside", "program_modules", "task_folder", "task_neighbours",
-           "task_snapshot", "with_task_modules"]
+__all__ = ["RAPID_SUFFIXES", "is_rapid", "modules_beside", "program_modules", "task_folder",
+           "task_neighbours", "task_snapshot", "with_task_modules"]
