@@ -112,8 +112,9 @@ def _check_joints(read: ReadBack, expected: Expected, filename: str) -> None:
 _TEMPLATE_NAME = "rapidfix_template_target"
 _TEMPLATE_AXES = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
 # the name a declaration declares (after LOCAL / TASK, the storage and the type)
-_DECLARED = re.compile(r"\s*(?:LOCAL\s+)?(?:TASK\s+)?(?:VAR|PERS|CONST)\s+[A-Za-z][A-Za-z0-9_]*"
-                       r"\s+([A-Za-z][A-Za-z0-9_]*)", re.IGNORECASE)
+# (a name may hold letters of ISO 8859-1: `\w` takes every letter the grammar's NAME does)
+_DECLARED = re.compile(r"\s*(?:LOCAL\s+)?(?:TASK\s+)?(?:VAR|PERS|CONST)\s+\w+\s+(\w+)",
+                       re.IGNORECASE)
 
 
 def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadBack | None:

@@ -42,7 +42,14 @@ NUMBER = r"0[xX][0-9a-fA-F]+|0[bB][01]+|0[oO][0-7]+|(?:\d+(?:\.\d*)?|\.\d+)(?:[e
 _N = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
                      rf"(?:\s*,\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\]))*\s*\]")
-_LATIN1 = "\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+# A name as the grammar's NAME takes it, in either case: ASCII letters and the letters of
+# ISO 8859-1 (`pÜbergabe`, `Año`), written with escapes (the patterns go into grammar
+# text). NAME is case-insensitive, which in Python also lets a few letters outside
+# ISO 8859-1 through (the Kelvin sign): a name holding one ends a fast run, and the
+# plain grammar reads its statement.
+LATIN1_LETTERS = r"\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
+NAME_START = rf"[A-Za-z{LATIN1_LETTERS}]"
+NAME = rf"{NAME_START}[A-Za-z0-9_{LATIN1_LETTERS}]*"
 # The grammar's STRING: `""` stands for a quote; backslashes and every separator may
 # stand inside.
 STRING = r'"(?:[^"\r\n]|"")*"'
@@ -98,7 +105,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # After an operand: an operator and the start of a further operand, or the end.
     # (arithmetic, relations and logic: the reader checks the grammar's structure)
     operator = rf"(?:[-+*\x2f=]|<[>=]?|>=?|(?i:DIV|MOD|AND|OR|XOR){word_end})"
-    follow = (rf"{WS}*(?:{operator}{WS}*(?=[-+.0-9A-Za-z(\"])"
+    follow = (rf"{WS}*(?:{operator}{WS}*(?=[-+.0-9A-Za-z{LATIN1_LETTERS}(\"])"
               rf"|(?=[,;)}}\]\\]))")
     number = f"(?=[0-9.])(?:{NUMBER})"
 
@@ -110,17 +117,17 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     def postfix(item: str) -> str:
         """Components and array indices (`.x`, `{i, 2}`) after an operand."""
         index = rf"\{{{WS}*{items(item, _BRACE, _BRACE)}+\}}"
-        return rf"(?:{WS}*(?:\.{WS}*[A-Za-z][A-Za-z0-9_]*{word_end}|{index}))*"
+        return rf"(?:{WS}*(?:\.{WS}*{NAME}{word_end}|{index}))*"
 
     # an operand inside a function call or an index: its indices numbers or names
     leaf = f"(?:{number}|{value_name})"
     truth = rf"(?i:TRUE|FALSE){word_end}"
-    operand = (rf"{signs}(?:{number}|(?=[A-Za-z])(?:{value_name}{postfix(leaf)}|{truth})"
+    operand = (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}{postfix(leaf)}|{truth})"
                rf"|{STRING})")
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
     # most are
-    quick = (rf"(?:(?:-{WS}*)?{number}|(?=[A-Za-z])(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
+    quick = (rf"(?:(?:-{WS}*)?{number}|(?={NAME_START})(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
@@ -141,10 +148,10 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     either = rf"(?:{quick}|(?!{quick}){simple})"
     # a function call's arguments may be calls of sums themselves, one level deep
     # (`Offs(RelTool(p,0,0,5),0,0,-nLift)`)
-    nested = rf"(?=[A-Za-z]){value_name}{WS}*{call_list(f'(?:{loose}|{either})')}"
+    nested = rf"(?={NAME_START}){value_name}{WS}*{call_list(f'(?:{loose}|{either})')}"
     inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})")
     paren = rf"\({WS}*{simple}{WS}*\)"
-    term = (rf"{signs}(?:{number}|(?=[A-Za-z])(?:{value_name}(?:{WS}*{inner})?{postfix(simple)}"
+    term = (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}(?:{WS}*{inner})?{postfix(simple)}"
             rf"|{truth})|{paren}|{STRING})")
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
@@ -171,7 +178,7 @@ def condition_pattern(name: str) -> str:
 
 # What the reader takes without reading it again: the values fastpath reads itself
 # (a name, a (negated) number, a call or an array element of names and numbers).
-_NAME = "[A-Za-z][A-Za-z0-9_]*"
+_NAME = NAME
 _INDEX_ITEM = f"(?:{NUMBER}|{_NAME})"
 PLAIN_VALUE = re.compile(
     rf"(?:-{WS}*)?(?:{NUMBER})|{_NAME}(?:{WS}*(?:{_nested('(', ')')}"
@@ -186,7 +193,7 @@ _SPACE = re.compile(f"{WS}*")
 _WS_CHARS = frozenset(" \t\f\v\r\n\x1a")
 _NUMBER = re.compile(NUMBER)
 _STRING = re.compile(STRING)
-_WORD = re.compile(f"[A-Za-z{_LATIN1}][A-Za-z0-9_{_LATIN1}]*")
+_WORD = re.compile(NAME)
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
 _BOOLS = {"TRUE": True, "FALSE": False}
 _NONE: frozenset[str] = frozenset()

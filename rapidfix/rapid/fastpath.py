@@ -63,7 +63,10 @@ from rapidfix.rapid import fast_expressions
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.fast_expressions import (
+    LATIN1_LETTERS,
     MOVED_BY_FAST_EXPRESSIONS,
+    NAME,
+    NAME_START,
     PLAIN_VALUE,
     STRING,
     NotRead,
@@ -90,11 +93,8 @@ WS = r"[ \t\f\v\r\n\x1a]"
 # (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
 # cut short on backtracking, so nothing inside it is ever read as a statement).
 GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
-# The letters of ISO 8859-1 beyond a-z that RAPID names may hold (as rapid.lark's NAME).
-# The fast names below are ASCII only; a name holding one of these letters ends
-# no fast name (_WORD_END), so its statement is left to the plain grammar.
-_LATIN1_LETTERS = r"\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
-_WORD_END = rf"(?![A-Za-z0-9_{_LATIN1_LETTERS}])"
+# A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
+_WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 # An aggregate of numbers, up to two levels deep and without spaces, matched loosely
 # for speed; its numbers are checked when they are read (_number_group). Runs of
 # number characters are taken whole (one step of the regex engine, not one per
@@ -111,7 +111,7 @@ _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
 # (an expression too: fast_expressions)
 _SIMPLE_TEXT = _EXPRESSION_TEXT
 # A function call of such values (`Offs(p1,0,0,-10)`).
-_CALL_TEXT = rf'[A-Za-z][A-Za-z0-9_]*{WS}*\([^()"]*(?:{STRING}[^()"]*)*\)'
+_CALL_TEXT = rf'{NAME}{WS}*\([^()"]*(?:{STRING}[^()"]*)*\)'
 # A value: a function call whose arguments are such values or such calls
 # (`Offs(RelTool(p1,0,0,5),0,0,-10)`), an element of an array (`path{3}`, `grid{i,2}`),
 # arithmetic of them, or one of them.
@@ -141,7 +141,7 @@ def _keywords_after(prefix: str) -> list[str]:
 
 def _name(excluded: list[str]) -> str:
     """The NAME terminal, refusing the `excluded` keywords (grouped by first letter)."""
-    name = f"[A-Za-z][A-Za-z0-9_]*{_WORD_END}"
+    name = f"{NAME}{_WORD_END}"
     if not excluded:
         return name
     by_letter: dict[str, list[str]] = {}
@@ -193,11 +193,11 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     FOR's variable; with `groups`, each of those in a group of its own (for splitting a
     token, whose syntax the lexer has checked)."""
     c = f"({condition})" if groups else condition
-    name = f"([A-Za-z][A-Za-z0-9_]*){_WORD_END}" if groups else f"[A-Za-z][A-Za-z0-9_]*{_WORD_END}"
+    name = f"({NAME}){_WORD_END}" if groups else f"{NAME}{_WORD_END}"
 
     def keyword(words: str) -> str:
         """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
-        return rf"(?<![A-Za-z0-9_{_LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
+        return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
 
     return {
         "if": rf"(?i:IF){_WORD_END}{c}{keyword('THEN')}",
@@ -249,8 +249,8 @@ def grammar_extension(grammar: str) -> str:
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
     # a run starts with a statement (the gap before the first matches nothing)
-    calls = f"(?=[A-Za-z])(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
-    decls = f"(?=[A-Za-z])(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
+    calls = f"(?={NAME_START})(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    decls = f"(?={NAME_START})(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     heads = {kind: p[kind] for kind in _HEAD_RULES}
     if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
         raise ValueError("a terminal pattern holds '/'")  # a Lark regex literal ends at '/'
@@ -302,7 +302,7 @@ class LazyPattern:
 # Splitting a call whose syntax the lexer has checked: after its name (or its
 # first argument), one piece is an optional argument, a required value or the ';'.
 CALL_PIECE = LazyPattern(
-    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({VALUE_TEXT}))?"
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*({NAME})(?:{WS}*:={WS}*({VALUE_TEXT}))?"
     rf"|({VALUE_TEXT})|(;))"
 )
 
@@ -317,7 +317,7 @@ def declaration_pattern(modifiers: bool) -> LazyPattern:
     return LazyPattern(
         rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
         rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
-        rf"([A-Za-z][A-Za-z0-9_]*){WS}+([A-Za-z][A-Za-z0-9_]*){WS}*"
+        rf"({NAME}){WS}+({NAME}){WS}*"
         rf"(?:\{{{group('[^{}]*')}\}}{WS}*)?"
         rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
@@ -387,7 +387,7 @@ def aggregate_value(text: str) -> tuple:
 # Splitting the inside of a checked function call: one piece is an optional
 # argument, a required value or the closing parenthesis.
 _INNER_PIECE = LazyPattern(
-    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*([A-Za-z][A-Za-z0-9_]*)(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
+    rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*({NAME})(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
     rf"|({_CALL_TEXT}|{_SIMPLE_TEXT})|(\)))"
 )
 _WS_CHARS = " \t\f\v\r\n\x1a"
@@ -471,7 +471,7 @@ def _read(text: str, start: int) -> s.Expr:
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.
 _PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
 # An index of an array element, or a dimension: a number or a name.
-_INDEX_ITEM = re.compile(r"[A-Za-z0-9_.+\-]+")
+_INDEX_ITEM = re.compile(rf"[A-Za-z0-9_.+\-{LATIN1_LETTERS}]+")
 
 
 def _index_node(text: str, start: int) -> s.Index:
@@ -531,7 +531,7 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
-_CALL_HEAD = LazyPattern(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?")
+_CALL_HEAD = LazyPattern(rf"{GAP}({NAME})(?:{WS}+({VALUE_TEXT}))?")
 # The rest of a checked statement, up to its ';' (strings may hold one).
 _STATEMENT_END = re.compile(rf'(?:[^;"]+|{STRING})*;')
 # Distinct argument tails kept (a CAM program has a few dozen).
@@ -874,7 +874,7 @@ class FastSyntaxBuilder(SyntaxBuilder):
 def _head_splitters() -> dict[str, re.Pattern[str]]:
     """head_patterns with groups, compiled (the lexer has checked the tokens they split,
     so a name needs no keyword refused)."""
-    condition = condition_pattern("[A-Za-z][A-Za-z0-9_]*")
+    condition = condition_pattern(NAME)
     return {kind: re.compile(pattern)
             for kind, pattern in head_patterns(condition, True).items()}
 

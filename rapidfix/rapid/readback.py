@@ -41,6 +41,7 @@ from lark.exceptions import UnexpectedInput
 
 from rapidfix.exceptions import RapidSemanticError
 from rapidfix.rapid import syntax as s
+from rapidfix.rapid.fast_expressions import NAME
 from rapidfix.rapid.fastpath import (
     CALL_PIECE,
     GAP,
@@ -100,7 +101,7 @@ def run_parser() -> Lark:
 _BULK_DECL = declaration_pattern(False)
 # A call whose syntax the lexer has checked: its name, a first value after
 # whitespace if there is one, and the text up to its ';' (values hold no ';').
-_BULK_CALL = re.compile(rf"{GAP}([A-Za-z][A-Za-z0-9_]*)(?:{WS}+({VALUE_TEXT}))?([^;]*);")
+_BULK_CALL = re.compile(rf"{GAP}({NAME})(?:{WS}+({VALUE_TEXT}))?([^;]*);")
 _EMPTY: dict[str, tuple[str, str]] = {}
 
 

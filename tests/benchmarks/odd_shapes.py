@@ -24,6 +24,8 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                the surface), declared and inline
 - track:       a robot on a track: the first external axis changes with every target
 - remarks:     a comment after every statement on its line, declarations and moves
+- latin1:      a Swedish or German cell: targets, tool, work object, speed and routines
+               named with the letters of ISO 8859-1 RAPID allows (`pÖver`, `tFräs`)
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -41,7 +43,7 @@ from rapidfix.kinematics import load_robot
 
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
-              "feeds", "tails", "five_axis", "track", "remarks")
+              "feeds", "tails", "five_axis", "track", "remarks", "latin1")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -316,12 +318,29 @@ def _remarks(n: int) -> list[str]:
     return [*_head("Remarks"), *decls, *_parts(moves), "ENDMODULE"]
 
 
+def _latin1(n: int) -> list[str]:
+    renamed = {"tMill": "tFräs", "wPlate": "wBänk", "vFeed": "vMatning_Å"}
+
+    def swedish(line: str) -> str:
+        for old, new in renamed.items():
+            line = line.replace(old, new)
+        return line
+
+    decls = [line.replace(" p", " pÖver", 1) for line in _decls(n)]
+    moves = [f"    Move{'LJ'[k % 2]} pÖver{k},{'vMatning_Å' if k % 3 else 'v200'},z1,tFräs"
+             "\\WObj:=wBänk;" for k in range(n)]
+    parts = [line.replace("PROC Part", "PROC Hämta") for line in _parts(moves)]
+    calls = [f"    Hämta{k};" for k in range((n + 499) // 500)]
+    return [*map(swedish, _head("Svets")), *decls, *parts, "  PROC Kör()", *calls,
+            "  ENDPROC", "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
              "records": _records, "messages": _messages, "conditions": _conditions,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
-             "remarks": _remarks}
+             "remarks": _remarks, "latin1": _latin1}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -168,6 +168,12 @@ FAST = {
         "  TRYNEXT;",
         "ENDFUNC",
     ),
+    "ISO 8859-1 letters in names": module(
+        f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
+        "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
+        "  MoveL Offs(Año,0,0,ß),v100,z1,tool0\\WObj:=mesaÉ;", "  Ünter;", "  MoveL p1,v1,z1,t;",
+        "  Foo \\Ø;", "  Bar;", "ENDPROC",
+    ),
 }
 
 MIXED = {
@@ -229,12 +235,6 @@ MIXED = {
         "  Foo path{0x2}, e{1} \\A:=n{2};", "  MoveL Offs(path{1},0,0,1),v100,z1,tool0;",
         "ENDPROC",
     ),
-    "ISO 8859-1 letters in names": module(
-        f"CONST robtarget pÑ:={TARGET};", f"CONST robtarget Año:={TARGET};", "VAR num ß;",
-        "PROC Ñandú()", "  MoveL pÑ,v100,z1,tool0;", "  MoveL p1,v100,z1,herramientaÑ;",
-        "  MoveL Offs(Año,0,0,ß),v100,z1,tool0\\WObj:=mesaÉ;", "  Ünter;", "  MoveL p1,v1,z1,t;",
-        "  Foo \\Ø;", "  Bar;", "ENDPROC",
-    ),
 }
 
 
@@ -244,8 +244,9 @@ def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
     assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
-@pytest.mark.parametrize("name", ["function calls and negated numbers", "calls of calls"])
-def test_function_calls_and_negated_numbers_are_read_in_runs(name):
+@pytest.mark.parametrize("name", ["function calls and negated numbers", "calls of calls",
+                                  "ISO 8859-1 letters in names"])
+def test_calls_of_values_and_latin1_names_are_read_in_runs(name):
     from rapidfix.rapid.readback import Run, run_parser
 
     module = run_parser().parse(FAST[name]).modules[0]
