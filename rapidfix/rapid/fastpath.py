@@ -95,11 +95,13 @@ WS = r"[ \t\f\v\r\n\x1a]"
 GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
 # A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
 _WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
-# An aggregate of numbers, up to two levels deep and without spaces, matched loosely
-# for speed; its numbers are checked when they are read (_number_group). Runs of
-# number characters are taken whole (one step of the regex engine, not one per
-# character); as they hold no bracket, this never backtracks.
-_LOOSE_AGGREGATE = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)*\]"
+# An aggregate of numbers, up to two levels deep, matched loosely for speed; its numbers
+# are checked when they are read (_number_group, aggregate_value). Runs of number
+# characters, commas and whitespace (`[[600, 0, 650], [1, 0, 0, 0], ...]`) are taken
+# whole (one step of the regex engine, not one per character); as they hold no bracket,
+# this never backtracks.
+_LOOSE_AGGREGATE = (r"\[[-+0-9.eE, \t\f\v\r\n\x1a]*(?:\[[-+0-9.eE, \t\f\v\r\n\x1a]*\]"
+                    r"[-+0-9.eE, \t\f\v\r\n\x1a]*)*\]")
 # An aggregate of such aggregates, three levels deep, each item two levels deep (an
 # array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
 _ITEM = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)+\]"
@@ -349,9 +351,9 @@ _GROUP_CACHE: Memo = Memo(65536)
 
 def _number_group(text: str, keep: bool = True) -> tuple[float, ...]:
     """'1,-2.5,9E+09' -> (1.0, -2.5, 9e9), kept in the cache unless `keep` is False.
-    The loose lexer pattern let through only the characters -+0-9.eE, and of such
-    strings float() takes exactly those that RAPID's number syntax takes; anything
-    else raises NotFast."""
+    The loose lexer pattern let through only the characters -+0-9.eE and whitespace, and
+    of such strings float() takes exactly those that RAPID's number syntax takes (a
+    number with whitespace around it, never inside); anything else raises NotFast."""
     try:
         value = tuple(map(float, text.split(",")))
     except ValueError:
@@ -380,6 +382,12 @@ def aggregate_value(text: str) -> tuple:
             cached = _GROUP_CACHE.get
             return tuple([cached(g) or _number_group(g) for g in groups])
     if _exact_aggregate().fullmatch(text):  # numbers and groups mixed: [1.8,[0,0,40],...]
+        compact = "".join(text.split())
+        if len(compact) < len(text):
+            # whitespace around the groups (`[[600, 0, 650], [1, 0, 0, 0]]`): a grammar
+            # token whose numbers hold none (its `\s`, which str.split takes), so the same
+            # numbers without it, the groups read as above
+            return aggregate_value(compact)
         return numeric_aggregate_value(text)
     raise NotFast(text)
 

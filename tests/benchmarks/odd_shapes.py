@@ -24,6 +24,8 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                the surface), declared and inline
 - track:       a robot on a track: the first external axis changes with every target
 - remarks:     a comment after every statement on its line, declarations and moves
+- spaced:      a space after every comma and around `:=` (hand-written and some posts'
+               style), declared and inline targets, some declarations over three lines
 - latin1:      a Swedish or German cell: targets, tool, work object, speed and routines
                named with the letters of ISO 8859-1 RAPID allows (`pÖver`, `tFräs`)
 
@@ -43,7 +45,7 @@ from rapidfix.kinematics import load_robot
 
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
-              "feeds", "tails", "five_axis", "track", "remarks", "latin1")
+              "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -318,6 +320,21 @@ def _remarks(n: int) -> list[str]:
     return [*_head("Remarks"), *decls, *_parts(moves), "ENDMODULE"]
 
 
+def _spaced(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    targets = [_robtarget(trans[k], confs[k]).replace(",", ", ") for k in range(n)]
+    half = n // 2
+
+    def over_lines(target: str) -> str:
+        return "[\n    " + target[1:-1].replace("], [", "],\n    [") + "\n  ]"
+
+    decls = [f"  CONST robtarget p{k} := {targets[k] if k % 7 else over_lines(targets[k])};"
+             for k in range(half)]
+    moves = [f"    MoveL {f'p{k}' if k < half else targets[k]}, v100, z1, tMill \\WObj := wPlate;"
+             for k in range(n)]
+    return [*_head("Spaced"), *decls, *_parts(moves), "ENDMODULE"]
+
+
 def _latin1(n: int) -> list[str]:
     renamed = {"tMill": "tFräs", "wPlate": "wBänk", "vFeed": "vMatning_Å"}
 
@@ -340,7 +357,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
              "records": _records, "messages": _messages, "conditions": _conditions,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
-             "remarks": _remarks, "latin1": _latin1}
+             "remarks": _remarks, "spaced": _spaced,
+             "latin1": _latin1}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -7,6 +7,7 @@ terminals added, and compares the trees node by node (types, offsets, values).
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -298,13 +299,19 @@ def test_errors_are_those_of_the_plain_grammar():
         "[1.8,[0,0,40],[1,0,0,0],0,0,0]",
         "[[1e3,-2.5E-2,+.5,7.]]",
         "[[1],2]",
+        "[ 1 , 2 ]",
+        "[[1, 2, 3], [0, 0, 1, 0], [-1, 0, -1, 0], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]]",
+        "[\n  [1,2],\n\t[3]\n]",
+        "[1.8, [0,0,40], 0]",
     ],
 )
 def test_aggregate_values_match_the_grammar_reader(text):
     assert aggregate_value(text) == numeric_aggregate_value(text)
 
 
-@pytest.mark.parametrize("text", ["[1.2.3]", "[1,,2]", "[[1,2],,[3]]", "[-]", "[1e]", "[[],1]"])
+@pytest.mark.parametrize("text", ["[1.2.3]", "[1,,2]", "[[1,2],,[3]]", "[-]", "[1e]", "[[],1]",
+                                  # whitespace inside a number, or in place of a comma
+                                  "[1 2]", "[[1, 2] [3]]", "[- 1]", "[1 .5]", "[[1 2],[3]]"])
 def test_malformed_aggregates_are_left_to_the_grammar(text):
     with pytest.raises(NotFast):
         aggregate_value(text)
@@ -325,6 +332,27 @@ def read(fn, *args):
         return repr(fn(*args))
     except NotFast:
         return "NotFast"
+
+
+spaced_chars = st.text(alphabet="-+0123456789.eE, \t\n", max_size=10)
+
+
+@st.composite
+def spaced_aggregate(draw: st.DrawFn) -> str:
+    """Text of the loose aggregate pattern's shape, whitespace anywhere in it."""
+    items = draw(st.lists(spaced_chars.map(lambda c: f"[{c}]") | spaced_chars, max_size=5))
+    return "[" + draw(st.sampled_from([",", ", ", " , ", "", " "])).join(items) + "]"
+
+
+@settings(max_examples=500, deadline=None)
+@given(spaced_aggregate())
+def test_aggregates_with_whitespace_are_read_as_the_grammar_reads_them(text):
+    # what the loose pattern lets through is a NUMERIC_AGGREGATE of the grammar, read as
+    # its rule reads it, or it is left to the plain grammar (never a number made of two)
+    exact = re.compile(next(t.pattern.to_regexp() for t in rapid_parser().terminals
+                            if t.name == "NUMERIC_AGGREGATE"))
+    expected = repr(numeric_aggregate_value(text)) if exact.fullmatch(text) else "NotFast"
+    assert read(aggregate_value, text) == expected
 
 
 @settings(max_examples=300, deadline=None)
