@@ -195,6 +195,11 @@ _NUMBER = re.compile(NUMBER)
 _STRING = re.compile(STRING)
 _WORD = re.compile(NAME)
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
+# An aggregate's item that is a literal alone: (sign, number), string or TRUE / FALSE,
+# then whitespace and the ',' or ']' after it (_Reader._item)
+_LITERAL_ITEM = re.compile(
+    rf"{WS}*(?:(?:([-+]){WS}*)?({NUMBER})|({STRING})|((?i:TRUE|FALSE))"
+    rf"(?![A-Za-z0-9_{LATIN1_LETTERS}]))(?={WS}*[,\]])")
 _BOOLS = {"TRUE": True, "FALSE": False}
 _NONE: frozenset[str] = frozenset()
 # LE, GE and NE before LT, GT and EQ: the lexer takes the longest
@@ -342,10 +347,10 @@ class _Reader:
                 return s.NumericAggregate(base + pos, base + m.end(),
                                           numeric_aggregate_value(m.group()))
             self.pos += 1
-            items = [self.condition()]
+            items = [self._item()]
             while self._skip() == ",":
                 self.pos += 1
-                items.append(self.condition())
+                items.append(self._item())
             return s.Aggregate(base + pos, self._expect("]"), items)
         word = _WORD.match(text, pos) if char else None
         if word is None:
@@ -361,6 +366,26 @@ class _Reader:
         if self._skip() == "(":
             return self.call(name, base + pos)
         return s.NameRef(base + pos, base + word.end(), name)
+
+    def _item(self) -> s.Expr:
+        """An aggregate's item: a literal alone (a signed number, a string, TRUE or FALSE
+        before the next ',' or ']', as a table of records holds hundreds) made here,
+        the node `condition` makes of it; anything else read by `condition`."""
+        m = _LITERAL_ITEM.match(self.text, self.pos)
+        if m is None:
+            return self.condition()
+        base = self.base
+        sign, number, string, truth = m.group(1, 2, 3, 4)
+        self.pos = m.end()
+        if number is not None:
+            node: s.Expr = s.Number(base + m.start(2), base + m.end(2), number_value(number),
+                                    number)
+            if sign is not None:
+                node = s.Unary(base + m.start(1), node.end, sign, node)
+            return node
+        if string is not None:
+            return s.String(base + m.start(3), base + m.end(3), string_value(string))
+        return s.Bool(base + m.start(4), base + m.end(4), _BOOLS[truth.upper()])
 
     def call(self, name: str, start: int) -> s.Call:
         """A function call whose name stands at `start`, at its '('."""
@@ -421,17 +446,31 @@ def _fields(kind: type) -> tuple[str, ...]:
 
 
 def _depth(node: s.Node) -> int:
-    """How many levels of nodes `node` holds (walked without recursion)."""
+    """How many levels of nodes `node` holds (walked without recursion). Literals and
+    names hold none below them, and an aggregate only its items: a table of records
+    (thousands of literals) is walked at a set lookup per item."""
     deepest, stack = 0, [(node, 1)]
+    pop, push, leaves, aggregate = stack.pop, stack.append, _LEAVES, s.Aggregate
     while stack:
-        item, level = stack.pop()
-        deepest = max(deepest, level)
-        for name in _fields(type(item)):
+        item, level = pop()
+        if level > deepest:
+            deepest = level
+        kind = type(item)
+        if kind in leaves:
+            continue
+        if kind is aggregate:
+            stack.extend([(part, level + 1) for part in item.items])
+            continue
+        for name in _fields(kind):
             child = getattr(item, name, None)
             for part in (child if isinstance(child, list) else (child,)):
                 if isinstance(part, s.Node):
-                    stack.append((part, level + 1))
+                    push((part, level + 1))
     return deepest
+
+
+# node types that hold no node (_depth)
+_LEAVES = frozenset({s.Number, s.String, s.Bool, s.NameRef, s.NumericAggregate})
 
 
 def _read_whole(text: str, start: int, read: Callable[[_Reader], list[s.Expr]]

@@ -464,7 +464,14 @@ _WHOLE_STRING = re.compile(STRING)
 def _read(text: str, start: int) -> s.Expr:
     """read_expression(text, start) of a condition (NotFast where it gives up). A program
     repeats its expressions (`nCount + 1`, `nCount < 3`): each text is read once, and
-    read again as the first's nodes moved to where it stands."""
+    read again as the first's nodes moved to where it stands. A long text (a table of
+    records, `[[0,11,1,"s7j46w0-0",...],...]`) hardly ever recurs (2 of 125 in the real
+    corpus): it is read where it stands and not kept, which spares copying its nodes."""
+    if len(text) > READ_KEPT_CHARS:
+        try:
+            return read_expression(text, start, condition=True)
+        except NotRead:
+            raise NotFast(text) from None
     known = _READ.get(text)
     if known is not None:
         return _moved(known, start - known.start)
@@ -474,6 +481,10 @@ def _read(text: str, start: int) -> s.Expr:
         raise NotFast(text) from None
     _READ.keep(text, node)
     return _moved(node, 0)  # the kept nodes are nobody's
+
+
+#: the longest expression text _read keeps (see there)
+READ_KEPT_CHARS = 256
 
 
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.

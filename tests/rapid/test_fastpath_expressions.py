@@ -278,3 +278,37 @@ def test_a_separator_before_the_end_is_refused_as_the_grammar_refuses_it(stateme
     with pytest.raises(UnexpectedInput):
         plain_tree(text)
     assert_parses_as_plain(text)
+
+
+def _record_table(rows: int) -> str:
+    return "[" + ",\n    ".join(
+        f'[{k},11,1.5,0,-{k % 7},0, -2.5,-60,"s7j{k}w0-0","",TRUE,{k * 3.5},FALSE]'
+        for k in range(rows)) + "]"
+
+
+def test_a_table_of_records_is_read_in_a_run_to_the_plain_tree():
+    # the rows of literals (signed numbers, strings, TRUE/FALSE) of a weld table are made
+    # item by item without the expression chain, and the long text is not kept
+    from rapidfix.rapid import fastpath
+    from rapidfix.rapid.readback import Run, run_parser
+
+    table = _record_table(40)
+    text = module("RECORD weldrow", "  num a;", "ENDRECORD",
+                  f"PERS weldrow rows{{40}}:={table};", f"PERS weldrow again{{40}}:={table};",
+                  "PROC main()", "  Stop;", "ENDPROC")
+    assert len(table) > fastpath.READ_KEPT_CHARS
+    fastpath.forget_texts()
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert table not in fastpath._READ
+    items = run_parser().parse(text).modules[0].items
+    assert sum(isinstance(item, Run) for item in items) == 1
+
+
+def test_the_depth_of_a_table_is_that_of_its_nodes():
+    from rapidfix.rapid.fast_expressions import _depth
+
+    node = read_expression(_record_table(3), 0)
+    # the table, a row, a negated number, the number
+    assert _depth(node) == 4
+    # the aggregates, the negation, the parentheses, the sum, the component, the name
+    assert _depth(read_expression("[[1,2],[3,-(4+a.b)]]", 0)) == 7
