@@ -182,8 +182,9 @@ def _patterns() -> dict[str, str]:
     # (written once), and split_calls refuses (NotFast) what is more than one value
     call = (f"{call_name}(?:{expression['selectors']}{WS}*:={WS}*)?"
             f"(?:{WS}*{expression['arguments']})?{WS}*;")
-    # array dimensions: numbers (`{50}`, `{2,3}`)
-    dims = rf"\{{{WS}*{number}(?:{WS}*,{WS}*{number})*{WS}*\}}"
+    # array dimensions: numbers or names of constants (`{50}`, `{2,3}`, `{nChannels,10}`)
+    dim = f"(?:{number}|{value_name})"
+    dims = rf"\{{{WS}*{dim}(?:{WS}*,{WS}*{dim})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
             f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
     return {"call": call, "decl": decl, **head_patterns(expression["condition"], False)}

@@ -175,6 +175,11 @@ FAST = {
         "  MoveL Offs(Año,0,0,ß),v100,z1,tool0\\WObj:=mesaÉ;", "  Ünter;", "  MoveL p1,v1,z1,t;",
         "  Foo \\Ø;", "  Bar;", "ENDPROC",
     ),
+    "dimensions given by names": module(
+        "CONST num nMax:=10;", "VAR robtarget buf{nMax};",
+        "PERS num grid{nRows, 2}:=[[1,2],[3,4]];", "VAR num e{ 2 , nCols };",
+        "PROC main()", "  Stop;", "ENDPROC",
+    ),
 }
 
 MIXED = {
@@ -246,7 +251,7 @@ def test_simple_statements_take_the_fast_path_to_the_same_tree(name):
 
 
 @pytest.mark.parametrize("name", ["function calls and negated numbers", "calls of calls",
-                                  "ISO 8859-1 letters in names"])
+                                  "ISO 8859-1 letters in names", "dimensions given by names"])
 def test_calls_of_values_and_latin1_names_are_read_in_runs(name):
     from rapidfix.rapid.readback import Run, run_parser
 
