@@ -319,14 +319,58 @@ def test_the_builder_is_freed_by_reference_counting_alone():
             gc.enable()
 
 
-def test_a_large_build_hands_its_objects_to_the_oldest_generation(monkeypatch):
-    monkeypatch.setattr(parse_module, "_MANY_OBJECTS", 1000)
+def _large_program(n: int = 300) -> str:
     data = "\n".join(f"CONST robtarget p{i} := [[{i},0,0],[1,0,0,0],[0,0,0,0],{UNUSED}];"
-                     for i in range(300))
-    body = "\n".join(f"  MoveL p{i}, v100, z10, tool0;" for i in range(300))
+                     for i in range(n))
+    body = "\n".join(f"  MoveL p{i}, v100, z10, tool0;" for i in range(n))
+    return module(data, body)
+
+
+@pytest.fixture
+def collector_state():
+    """The collector as a test found it: enabled, nothing frozen (restored after)."""
+    was_enabled = gc.isenabled()
+    gc.enable()
+    gc.unfreeze()
+    yield
+    gc.unfreeze()
+    if not was_enabled:
+        gc.disable()
+
+
+def test_a_large_build_keeps_its_objects_out_of_later_collections(monkeypatch,
+                                                                  collector_state):
+    monkeypatch.setattr(parse_module, "_MANY_OBJECTS", 1000)
     full_collections = gc.get_stats()[2]["collections"]
-    program = parse_program(module(data, body))
+    program = parse_program(_large_program())
     assert len(program.motions) == 300
-    if gc.isenabled():
-        assert gc.get_stats()[2]["collections"] == full_collections + 1
-        assert gc.get_count()[0] < 1000  # the young generation starts empty
+    assert gc.get_stats()[2]["collections"] == full_collections  # nothing walked
+    assert gc.get_count()[0] < 1000  # the young generation starts empty
+    assert gc.get_freeze_count() > 300 * 5  # the model's objects, and all before them
+    frozen = gc.get_freeze_count()
+    del program
+    assert gc.get_freeze_count() < frozen - 300 * 3  # reference counting still frees it
+
+
+class _Cyclic:
+    """An object in a reference cycle: only the cyclic collector frees it."""
+
+    def __init__(self) -> None:
+        self.me = self
+
+
+def test_cyclic_garbage_frozen_by_a_build_is_collected_by_a_later_one(monkeypatch,
+                                                                      collector_state):
+    monkeypatch.setattr(parse_module, "_MANY_OBJECTS", 1000)
+    garbage = _Cyclic()
+    gone = weakref.ref(garbage)
+    del garbage  # cyclic garbage the collector has not seen yet
+    first = parse_program(_large_program())  # frozen with the model
+    assert gone() is not None
+    gc.collect()
+    assert gone() is not None  # frozen objects are not collected
+    # while the first model stands, what was frozen outnumbers a small build's objects:
+    # that build collects everything once before it freezes
+    second = parse_program(_large_program(150))
+    assert gone() is None
+    assert len(first.motions) == 300 and len(second.motions) == 150
