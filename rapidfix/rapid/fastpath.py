@@ -445,7 +445,10 @@ def _value_node(text: str, start: int) -> s.Expr:
         try:
             if _DEEP_START.match(text):
                 return _deep_aggregate(text, start, _RESTS)
-            return s.NumericAggregate(start, end, aggregate_value(text))
+            # an inline target: its position read, the rest once per distinct text
+            grouped = grouped_value(text, _RESTS) if text.startswith("[[") else None
+            return s.NumericAggregate(start, end, grouped if grouped is not None
+                                      else aggregate_value(text))
         except NotFast:  # the loose pattern let arithmetic through: [1-1,2]
             return _read(text, start)
     if first.isdigit() or first == ".":
@@ -754,6 +757,26 @@ def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.As
     return s.Assignment(target.start, base + end, target, value)
 
 
+def grouped_value(value: str, rests: Memo) -> tuple | None:
+    """The value of a plain aggregate `[[x,y,z],[...],...]` whose first item is a group
+    of numbers: that group read every time (a position seldom recurs, so it is not
+    kept), what follows it once per distinct text (`rests`). None for any other shape;
+    NotFast where the loose pattern let arithmetic by (`[[1-1,2],[3]]`)."""
+    cut = value.find("]")
+    group = value[2:cut]
+    if "[" in group or not value.startswith("],[", cut):
+        return None
+    rest = value[cut + 1:]
+    items = rests.get(rest)
+    if items is None:  # the same after any group
+        items = aggregate_value("[[0]" + rest)[1:]
+        rests.keep(rest, items)
+    try:
+        return (tuple(map(float, group.split(","))), *items)
+    except ValueError:
+        raise NotFast(value) from None
+
+
 def shared_aggregate_value(text: str, rests: Memo) -> tuple:
     """aggregate_value(text), reading what follows a leading group once per distinct text.
 
@@ -804,20 +827,12 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
             # two levels, or three (an array's items), of numbers only (an aggregate of
             # sums, `[[x+1,...],...]`, is fast_expressions' to read)
             if value.startswith("[[") and _PLAIN_AGGREGATE.fullmatch(value):
-                cut = value.find("]")
-                group = value[2:cut]
-                if "[" not in group and value.startswith("],[", cut):
-                    rest = value[cut + 1:]
-                    try:
-                        items = rests.get(rest)
-                        if items is None:  # the same after any group
-                            items = aggregate_value("[[0]" + rest)[1:]
-                            rests.keep(rest, items)
-                        # (a position seldom recurs: not kept)
-                        position = tuple(map(float, group.split(",")))
-                        init = numeric_aggregate(at, at + len(value), (position, *items))
-                    except (NotFast, ValueError):  # arithmetic the loose pattern let by
-                        pass
+                try:
+                    grouped = grouped_value(value, rests)
+                except NotFast:  # arithmetic the loose pattern let by
+                    grouped = None
+                if grouped is not None:
+                    init = numeric_aggregate(at, at + len(value), grouped)
             if init is None:
                 init = _value_node(value, at)
         if dims is None:

@@ -380,6 +380,11 @@ class ModelBuilder:
                            "conditional argument is decided at run time")
         text = self.source.text[expr.start:expr.end]
         if type(expr) is s.NumericAggregate:  # its value is read already; seldom repeated
+            value = expr.value
+            if type_hint is not None and fits_type(type_hint, value):
+                # an inline target of the instruction's type: what _operand_fields gives
+                return Operand(arg, self.source, text, "inline", None, type_hint, value,
+                               True, None, None)
             return Operand(arg, self.source, text, *self._operand_fields(
                 expr, type_hint, module, routine))
         # the same text in the same scope has the same form, value and declaration

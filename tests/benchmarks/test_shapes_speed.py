@@ -11,8 +11,9 @@ For each shape of tests/benchmarks/program_shapes.py, in one process:
   per second of CPU time and their ratio (targets: >= 60,000 lines/s and >= 8x);
 - rewrite: `rapidfix rewrite` as a fresh process (start-up and imports
   included), lines per second of the child's CPU time and wall time (target:
-  >= 30,000 lines/s), plus the time per phase of `rewrite_file` in this process
-  (RAPIDFIX_PROFILE_PHASES);
+  >= 30,000 lines/s), the time per step of `rewrite_file` in this process, and the
+  same in a fresh process with start-up, imports, system time and page faults
+  (process_phases.py);
 - start-up: `rapidfix --help` and `rapidfix check` of a small file (target < 0.3 s).
 
 Only correctness is asserted, never time.
@@ -206,6 +207,39 @@ def test_rewrite_phases(model_path, tmp_path, monkeypatch):
         other = total - sum(spent.values())
         print(f"{shape:10s} " + " ".join(f"{spent.get(lab, 0.0):11.2f}" for lab in labels)
               + f" {other:7.2f} {total:7.2f}")
+
+
+def test_rewrite_phases_whole_process(model_path, tmp_path):
+    """Where the time of `rapidfix rewrite` goes, as a user runs it: each step's CPU
+    seconds in a fresh process (tests/benchmarks/process_phases.py), with start-up and
+    imports, the compiled kernels' import, system time, page faults and peak memory."""
+    import json
+
+    script = Path(__file__).parent / "process_phases.py"
+    rows = []
+    for shape in ONLY:
+        source = tmp_path / f"{shape}{_suffix(shape)}"
+        source.write_bytes(any_program(shape, LINES).encode())
+        lines = source.read_bytes().count(b"\n")
+        subprocess.run([sys.executable, "-c", "import rapidfix.cli"], env=_user_env(),
+                       check=True)
+        done = subprocess.run(
+            [sys.executable, str(script), "rewrite", str(source), "--model", str(model_path),
+             "-o", str(tmp_path / f"out{_suffix(shape)}"), "--force"],
+            capture_output=True, text=True, env=_user_env())
+        row = json.loads(done.stdout.strip().splitlines()[-1])
+        assert row["code"] in (0, 3), done.stderr
+        rows.append((shape, lines, row))
+    labels = ("parse + model", "plan", "path check", "emission", "render", "read back",
+              "deviation", "other steps", "write", "start-up, imports, report")
+    print(f"\nrapidfix rewrite, whole process, CPU s per step, {LINES:,} lines per shape")
+    print(f"{'shape':10s} " + " ".join(f"{lab[:10]:>10s}" for lab in labels)
+          + f" {'total':>6s} {'(system)':>8s} {'numba imp':>9s} {'faults':>8s} {'peak MB':>7s}"
+          + f" {'lines/s':>8s}")
+    for shape, lines, row in rows:
+        print(f"{shape:10s} " + " ".join(f"{row[lab]:10.2f}" for lab in labels)
+              + f" {row['total']:6.2f} {row['system']:8.2f} {row['kernel imports']:9.2f}"
+              + f" {row['minor_faults']:8,d} {row['peak_mb']:7,d} {lines / row['total']:8,.0f}")
 
 
 def test_batch_of_mixed_shapes(model_path, tmp_path):

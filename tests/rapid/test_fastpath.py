@@ -23,6 +23,7 @@ from rapidfix.rapid.fastpath import (
     NotFast,
     aggregate_value,
     fast_parser,
+    grouped_value,
     parse_text,
     shared_aggregate_value,
 )
@@ -366,6 +367,33 @@ def test_sharing_what_follows_a_leading_group_reads_the_same_values(texts):
     rests = Memo(TAIL_LIMIT)
     for text in texts + ["[[1" + t[t.find("]"):] for t in texts if "]" in t[:-1]]:
         assert read(shared_aggregate_value, text, rests) == read(aggregate_value, text)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(loose_aggregate() | spaced_aggregate(), min_size=1, max_size=4))
+def test_a_grouped_value_is_the_aggregate_value_or_none(texts):
+    # the reading of an inline target (its position every time, the rest once): where it
+    # takes a text, the values of the grammar's reader; arithmetic left to the grammar
+    rests = Memo(TAIL_LIMIT)
+    for text in texts + ["[[1" + t[t.find("]"):] for t in texts if "]" in t[:-1]]:
+        if not text.startswith("[["):
+            continue
+        got = read(grouped_value, text, rests)
+        if got != "None":
+            assert got == read(aggregate_value, text)
+
+
+def test_a_grouped_value_reads_the_rest_once():
+    rests = Memo(TAIL_LIMIT)
+    first = grouped_value(TARGET, rests)
+    second = grouped_value(TARGET.replace("[1,-2.5,3E2]", "[4, 5,6]"), rests)
+    assert first == ((1.0, -2.5, 300.0), (1.0, 0.0, 0.0, 0.0), (0.0, -1.0, 2.0, 0.0),
+                     (9e9,) * 6)
+    assert second[0] == (4.0, 5.0, 6.0) and second[1] is first[1] and second[3] is first[3]
+    assert grouped_value("[[1,2],3]", rests) is None  # not a group after the first
+    assert grouped_value("[[1, 2], [3]]", rests) is None  # whitespace between the groups
+    with pytest.raises(NotFast):
+        grouped_value("[[1-1,2],[3]]", rests)
 
 
 PIECES = [
