@@ -72,7 +72,9 @@ def parse_program(source: str | bytes, filename: str = "<string>") -> Program:
     """Parse RAPID text or file bytes into a Program; raises RapidSyntaxError.
 
     Bytes are decoded as described in rapidfix.rapid.source; the Program can
-    write them back unchanged.
+    write them back unchanged. The objects of a large program are kept out of the
+    cyclic collector's later collections (rapidfix.gc_pause.settle_new_objects); they
+    are freed by reference counting when the Program is dropped.
     """
     decoded = decode_source(source, filename)
     original = source if isinstance(source, bytes) else decoded.encode()
