@@ -21,13 +21,14 @@ import time
 _spent: dict[str, float] = {}
 
 
-def _timed(label: str, fn):
+def timed(spent: dict[str, float], label: str, fn):
+    """`fn`, adding the CPU seconds of each call to spent[label]."""
     def wrapper(*args, **kwargs):
         start = time.process_time()
         try:
             return fn(*args, **kwargs)
         finally:
-            _spent[label] = _spent.get(label, 0.0) + time.process_time() - start
+            spent[label] = spent.get(label, 0.0) + time.process_time() - start
     return wrapper
 
 
@@ -52,15 +53,10 @@ def _time_kernel_imports() -> None:
 
     plain = importlib.import_module
 
+    kernel_import = timed(_spent, "kernel imports", plain)
+
     def import_module(name: str, package: str | None = None):
-        if not name.endswith("_compiled"):
-            return plain(name, package)
-        start = time.process_time()
-        try:
-            return plain(name, package)
-        finally:
-            _spent["kernel imports"] = (_spent.get("kernel imports", 0.0)
-                                        + time.process_time() - start)
+        return (kernel_import if name.endswith("_compiled") else plain)(name, package)
 
     importlib.import_module = import_module
 
@@ -83,7 +79,7 @@ def main(argv: list[str]) -> int:
         *path, name = attribute.split(".")
         for part in path:
             owner = getattr(owner, part)
-        setattr(owner, name, _timed(label, getattr(owner, name)))
+        setattr(owner, name, timed(_spent, label, getattr(owner, name)))
     status = cli.main(argv)
     usage = resource.getrusage(resource.RUSAGE_SELF)
     total = usage.ru_utime + usage.ru_stime

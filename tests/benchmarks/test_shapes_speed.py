@@ -35,6 +35,7 @@ from lark import Lark
 sys.path.insert(0, str(Path(__file__).parent))
 from batch_timing import batch_timings
 from more_shapes import MORE_SHAPES, more_program
+from process_phases import timed
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
@@ -171,21 +172,12 @@ def test_rewrite_phases(model_path, tmp_path, monkeypatch):
 
     spent: dict[str, float] = {}
 
-    def timed(label, fn):
-        def wrapper(*args, **kwargs):
-            c = time.process_time()
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                spent[label] = spent.get(label, 0.0) + time.process_time() - c
-        return wrapper
-
     for label, where, name in _PHASES:
         module_name, _, owner = where.partition("._")
         target = importlib.import_module(module_name)
         if owner:
             target = getattr(target, "_" + owner)
-        monkeypatch.setattr(target, name, timed(label, getattr(target, name)))
+        monkeypatch.setattr(target, name, timed(spent, label, getattr(target, name)))
     c = time.process_time()
     comp = Compensator.load(model_path)
     load = time.process_time() - c

@@ -341,8 +341,9 @@ def collector_state():
 def test_a_large_build_keeps_its_objects_out_of_later_collections(monkeypatch,
                                                                   collector_state):
     monkeypatch.setattr(parse_module, "_MANY_OBJECTS", 1000)
+    text = _large_program()
     full_collections = gc.get_stats()[2]["collections"]
-    program = parse_program(_large_program())
+    program = parse_program(text)
     assert len(program.motions) == 300
     assert gc.get_stats()[2]["collections"] == full_collections  # nothing walked
     assert gc.get_count()[0] < 1000  # the young generation starts empty
