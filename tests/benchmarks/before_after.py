@@ -27,7 +27,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -63,25 +62,17 @@ def _child(timed_set: str, argv: list[str]) -> None:
     print their CPU seconds as JSON on stderr."""
     import importlib
 
+    from process_phases import timed  # this script's folder: sys.path[0]
+
     from rapidfix.cli import main
 
     spent: dict[str, float] = {}
-
-    def timed(label: str, fn):
-        def wrapper(*args, **kwargs):
-            start = time.process_time()
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                spent[label] = spent.get(label, 0.0) + time.process_time() - start
-        return wrapper
-
     for module_name, owner, name in _TIMED[timed_set]:
         target = importlib.import_module(module_name)
         if owner is not None:
             target = getattr(target, owner, None)
         if target is not None and hasattr(target, name):
-            setattr(target, name, timed(name, getattr(target, name)))
+            setattr(target, name, timed(spent, name, getattr(target, name)))
     try:
         main(argv)
     except SystemExit:
