@@ -183,8 +183,19 @@ class RobotModel:
         self, T: np.ndarray, q_prev: np.ndarray, **ik_options: object
     ) -> tuple[np.ndarray, np.ndarray]:
         """The valid solution nearest q_prev (N, 6) or (6,): (q (N, 6), status (N,))."""
-        sols = self.ik(T, q_prev=q_prev, **ik_options)  # type: ignore[arg-type]
-        return select_nearest(sols, q_prev)
+        T = np.asarray(T, dtype=float)
+        if ik_options or T.ndim != 3 or T.shape[0] <= chunks.IK_CONF:
+            sols = self.ik(T, q_prev=q_prev, **ik_options)  # type: ignore[arg-type]
+            return select_nearest(sols, q_prev)
+        # in chunks, as ik_conf: the (poses × 8 branches × 6 axes) temporaries stay small
+        prev = np.broadcast_to(np.asarray(q_prev, dtype=float), (T.shape[0], 6))
+        q = np.empty((T.shape[0], 6))
+        status = np.empty(T.shape[0], dtype=np.int8)
+        for start in range(0, T.shape[0], chunks.IK_CONF):
+            rows = slice(start, start + chunks.IK_CONF)
+            q[rows], status[rows] = select_nearest(self.ik(T[rows], q_prev=prev[rows]),
+                                                   prev[rows])
+        return q, status
 
     def confdata(self, q: np.ndarray) -> np.ndarray:
         """ABB confdata [cf1, cf4, cf6, cfx] (N, 4) int of joints q (N, 6) rad."""

@@ -90,6 +90,18 @@ def indent_before(program: Program, offset: int) -> str | None:
     return before if before.strip() == "" else None
 
 
+def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tuple]:
+    """The edits of a statement to a point inserted before `motion`: the optional
+    arguments it drops (INTERMEDIATE_DROPS) and, with `zone`, its zone made
+    INTERMEDIATE_ZONE."""
+    edits = [(op.argument.start, op.argument.end, "")
+             for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
+    value = motion.zone.argument.value if zone and motion.zone is not None else None
+    if value is not None:
+        edits.append((value.start, value.end, INTERMEDIATE_ZONE))
+    return edits
+
+
 class _Emitter:
     """The edits being built: names allocated, declarations queued, check units."""
 
@@ -112,6 +124,8 @@ class _Emitter:
         self.inserted: set[str] = set()
         #: (stem lower-cased, literal) -> the jointtarget's name: one declaration for both
         self.jt_names: dict[tuple[str, str], str] = {}
+        #: (instruction, MoveAbsJ head, tail) -> an intermediate point's statement parts
+        self.variant_parts: dict[tuple[str, str, str], tuple[str, str] | tuple[()]] = {}
         self.units = CheckUnits()
         # what verification reads back: (statement id, target slot, target row), move
         # by move, and as (k,3) arrays for the moves emitted as columns ...
@@ -164,14 +178,17 @@ class _Emitter:
         # joint literals for all destinations and intermediate points at once
         dest_rows = np.array([self.sites[i].rows[-1] for i in joint_sites], dtype=int)
         inter_sites = [i for i in joint_sites if i in inter]
-        r = self.refined.points
-        q_parts = [p.q_cmd[dest_rows]] + [r.q_cmd[slice(*inter[i])] for i in inter_sites]
-        ext_parts = [t.extax[dest_rows]] + [
-            np.repeat(t.extax[self.sites[i].rows[-1]][None], inter[i][1] - inter[i][0], 0)
-            for i in inter_sites]
-        literals = jointtarget_literals(np.degrees(np.concatenate(q_parts)),
-                                        np.concatenate(ext_parts))
-        del q_parts, ext_parts
+        q_all, ext_all = p.q_cmd[dest_rows], t.extax[dest_rows]
+        if inter_sites:  # each point with its move's external axes
+            span = np.array([inter[i] for i in inter_sites], dtype=np.int64)
+            count = span[:, 1] - span[:, 0]
+            at = np.repeat(span[:, 0] - (np.cumsum(count) - count), count)
+            rows = np.array([self.sites[i].rows[-1] for i in inter_sites], dtype=int)
+            q_all = np.concatenate([q_all, self.refined.points.q_cmd[
+                at + np.arange(at.size)]])
+            ext_all = np.concatenate([ext_all, t.extax[np.repeat(rows, count)]])
+        literals = jointtarget_literals(np.degrees(q_all), ext_all)
+        del q_all, ext_all
         dest_literal = literals[: len(joint_sites)]
         inter_start = len(joint_sites)
         self._filtered(filtered_sites)
@@ -353,7 +370,8 @@ class _Emitter:
             first = extra_at[k]
             lines, variants, variant_slots = self._points_before(
                 sites[k], span, names[first:first + len(points)],
-                names[first + len(points)] if approach is not None else None)
+                names[first + len(points)] if approach is not None else None,
+                (heads[k], tails[k]))
             for j, variant in enumerate(variants):
                 inter_at.append((len(all_texts), segment, span[0] + j))
                 all_texts.append(variant)
@@ -415,42 +433,62 @@ class _Emitter:
         return name_at
 
     def _points_before(self, site: Site, inter: tuple[int, int] | None, inter_names: list[str],
-                       approach_name: str | None
+                       approach_name: str | None, shape: tuple[str, str] | None = None,
                        ) -> tuple[list[str], list[str], list[JointSlot | None]]:
         """The statements inserted before a move, to its intermediate points (`inter`:
         their rows in the refinement) and its approach point: (the lines to insert, the
         intermediate points' statements, their JointSlots — None in the move-by-move
-        route, which makes each statement from its edits)."""
+        route, which makes each statement from its edits). `shape`: the move's MoveAbsJ
+        statement around its target's name (see `_variant_parts`)."""
         motion = site.motion
         indent = indent_before(self.program, motion.syntax.start)
         sep = "\n" + indent if indent is not None else " "
-        drops = [(op.argument.start, op.argument.end, "")
-                 for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
         lines: list[str] = []
         variants: list[str] = []
         slots: list[JointSlot | None] = []
         if inter is not None:
-            zone = motion.zone
-            zone_value = zone.argument.value if zone is not None else None
-            zone_edit = ([(zone_value.start, zone_value.end, INTERMEDIATE_ZONE)]
-                         if zone_value is not None else [])
             self.inserted.update(inter_names)
-            parts = statement_variant(self.program, motion, joint_edits(
-                site, _NAME_MARK) + drops + zone_edit).split(_NAME_MARK) if self._columns else []
-            if len(parts) == 2:  # one statement with a mark where the name goes
+            parts = self._variant_parts(site, shape) if self._columns else None
+            if parts is not None:  # one statement with a place where the name goes
                 slots = [(parts[0], sub, parts[1]) for sub in inter_names]
                 variants = list(map("".join, slots))
             else:
+                edits = _intermediate_edits(motion)
                 variants = [statement_variant(self.program, motion,
-                                              joint_edits(site, sub) + drops + zone_edit)
+                                              joint_edits(site, sub) + edits)
                             for sub in inter_names]
                 slots = [None] * len(variants)
             lines = [variant + sep for variant in variants]
         if approach_name is not None:  # stands still there (fine), then arrives from one side
             self.inserted.add(approach_name)
+            drops = _intermediate_edits(motion, zone=False)
             lines.append(statement_variant(self.program, motion,
                                             joint_edits(site, approach_name) + drops) + sep)
         return lines, variants, slots
+
+    def _variant_parts(self, site: Site, shape: tuple[str, str] | None
+                       ) -> tuple[str, str] | None:
+        """(text before, text after) the name in the statement to one of the move's
+        intermediate points, or None where a name mark cannot stand for it.
+
+        `shape` is (the text before, the text after) the name in the move's own MoveAbsJ
+        statement. What an intermediate point changes (its zone, the optional arguments
+        it drops) all stands after the target, so moves of one instruction with the same
+        shape have the same parts: a program's thousands of arcs cost one variant each
+        distinct speed, zone and tool combination, and their operands are not made."""
+        key = None if shape is None else (site.motion.syntax.name, *shape)
+        parts = self.variant_parts.get(key) if key is not None else None
+        if parts is None:
+            motion = site.motion
+            edits = _intermediate_edits(motion)
+            if key is not None and any(a < site.targets[-1].argument.end for a, _, _ in edits):
+                key = None  # an edit before the target: this move's own statement
+            split = statement_variant(self.program, motion, joint_edits(
+                site, _NAME_MARK) + edits).split(_NAME_MARK)
+            parts = (split[0], split[1]) if len(split) == 2 else ()
+            if key is not None:
+                self.variant_parts[key] = parts
+        return parts or None
 
     def _stems(self, motions: list[MotionInstruction], operands: list[Operand]) -> list[str]:
         """`_stem` of many targets: a name where the target has one, else the

@@ -984,6 +984,64 @@ def fast_parser() -> Lark:
     ))
 
 
+# Whitespace and comments before a .prg's `%%%` header, and the header (rapid.lark's
+# PRG_HEADER), which may hold a `!` or a `"` that is neither a comment nor a string.
+_BEFORE_HEADER = re.compile(rf"(?:{WS}|![^\n]*)*")
+_PRG_HEADER = re.compile(r"%%%[\s\S]*?%%%")
+# A line read as the lexer reads it: strings whole, a comment's `!`, other characters.
+_LINE_LEXEMES = re.compile(rf"{STRING}|(!)|[^\"!\n]+|\"")
+
+
+def blank_comments(text: str) -> str:
+    """`text` with each comment's characters (but a carriage return) made spaces: the
+    same tokens at the same offsets, since the grammar ignores comments as it ignores
+    whitespace (`%ignore COMMENT`).
+
+    The fast terminals take whitespace anywhere in a statement but comments only between
+    statements, so a statement with a comment inside (`MoveL p1, ! to the hole` and its
+    speed on the next line) would leave the fast run for the plain grammar, some ten
+    times slower; blanked, it stays in the run. A `!` starts a comment unless it stands
+    in a string (strings never span lines, so only a line with a `"` before its `!` is
+    read token by token) or in the `%%%` header of a .prg."""
+    at = text.find("!")
+    if at < 0:
+        return text
+    header = _PRG_HEADER.match(text, _BEFORE_HEADER.match(text).end())
+    header_start, header_end = header.span() if header is not None else (0, 0)
+    pieces: list[str] = []
+    done = 0
+    while at >= 0:
+        if header_start <= at < header_end:
+            at = text.find("!", header_end)
+            continue
+        line_start = text.rfind("\n", 0, at) + 1
+        if line_start < header_end <= at:  # on the header's last line, after it
+            line_start = header_end
+        end = text.find("\n", at)
+        end = len(text) if end < 0 else end
+        if text.find('"', line_start, at) >= 0:
+            at = _comment_on_line(text, line_start, end)
+            if at < 0:  # every `!` of the line stands in a string
+                at = text.find("!", end)
+                continue
+        comment = text[at:end]
+        pieces += (text[done:at], " " * len(comment) if "\r" not in comment
+                   else "".join("\r" if c == "\r" else " " for c in comment))
+        done = end
+        at = text.find("!", end)
+    pieces.append(text[done:])
+    return "".join(pieces)
+
+
+def _comment_on_line(text: str, start: int, end: int) -> int:
+    """Where a comment starts in text[start:end] (one line, or its part after the
+    header), read as the lexer reads it, or -1 if every `!` there stands in a string."""
+    for m in _LINE_LEXEMES.finditer(text, start, end):
+        if m.group(1) is not None:
+            return m.start()
+    return -1
+
+
 def parse_text(text: str) -> s.SourceFile:
     """The syntax tree of `text`, from the fast parser when it reads the file
     exactly, else from the plain one.
@@ -995,7 +1053,7 @@ def parse_text(text: str) -> s.SourceFile:
     syntax error the plain grammar reads the error's window (rapid.error_window) first.
     """
     try:
-        return fast_parser().parse(text)
+        return fast_parser().parse(blank_comments(text))
     except NotFast:
         return rapid_parser().parse(text)
     except UnexpectedInput as err:

@@ -155,6 +155,29 @@ def test_large_batches_go_through_in_chunks_with_the_same_answers(monkeypatch):
     assert np.allclose(robot.fk(q_c[ok]), poses[ok], atol=1e-8)
 
 
+def test_nearest_in_chunks_gives_the_answers_of_one_pass(monkeypatch):
+    """ik_nearest on a large batch goes through in chunks, each pose with its own q_prev
+    (or one q_prev for all): the same joints and statuses as one pass over them all."""
+    from rapidfix import chunks
+
+    robot = load_robot("IRB1600-10/1.45")
+    rng = np.random.default_rng(4)
+    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (50, 6))
+    poses = robot.fk(q)
+    poses[9, :3, 3] = [5000.0, 0.0, 0.0]  # out of reach
+    prev = q + rng.normal(0.0, 0.3, q.shape)  # near the pose, not always on its branch
+    for q_prev in (prev, prev[0]):
+        want_q, want_status = select_nearest(robot.ik(poses, q_prev=q_prev), q_prev)
+        monkeypatch.setattr(chunks, "IK_CONF", 8)  # six full chunks and a short one
+        got_q, got_status = robot.ik_nearest(poses, q_prev)
+        monkeypatch.undo()
+        assert np.array_equal(got_status, want_status)
+        assert np.array_equal(np.nan_to_num(got_q, nan=9.0), np.nan_to_num(want_q, nan=9.0))
+        assert {IKStatus.OK, IKStatus.UNREACHABLE} <= set(got_status.tolist())
+        ok = got_status == IKStatus.OK
+        assert np.allclose(robot.fk(got_q[ok]), poses[ok], atol=1e-8)
+
+
 _COMPILED_CASES = [c for c in CASES if c[1] != "actual"]
 
 

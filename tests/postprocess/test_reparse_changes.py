@@ -26,6 +26,7 @@ from rapidfix.rapid.readback import read_bulk
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from cam_program import cam_program
 from odd_shapes import odd_program
+from program_shapes import shape_program
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mod", ".prg"))
@@ -199,13 +200,35 @@ def _filtered_cases() -> str:
 _STACKED = odd_program("stacked", 300)
 
 
+def _arcs() -> str:
+    """Arcs with intermediate points whose statements share their text after the target
+    or differ in it: switches before the targets, \\Z, \\Inpos and \\T (which an
+    intermediate point drops), other zones, a comment in the tail."""
+    variants = [
+        lambda line: line,
+        lambda line: line.replace("MoveC ", "MoveC \\Conc, "),
+        lambda line: line.replace(", fine,", ", z10 \\Z:=5,"),
+        lambda line: line.replace(", fine,", ", fine \\Inpos:=inpos20,"),
+        lambda line: line.replace(", vFeed,", ", vFeed \\T:=2,"),
+        lambda line: line.replace(", fine,", ", ! zone next\n      fine,"),
+        lambda line: line.replace(", fine,", ",fine ,"),
+    ]
+    lines, k = [], 0
+    for line in shape_program("movec", 400).splitlines():
+        if line.lstrip().startswith("MoveC "):
+            line = variants[(k // 2) % len(variants)](line)
+            k += 1
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
 @pytest.mark.parametrize("emit", ["jointtargets", "robtargets"])
-@pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked"])
+@pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked", "arcs"])
 def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name,
                                                                         emit):
     data = (cam_program(200) if name == "cam" else _filtered_cases()
             if name == "filtered_cases" else _STACKED if name == "stacked"
-            else (SAMPLES / name).read_bytes())
+            else _arcs() if name == "arcs" else (SAMPLES / name).read_bytes())
     data = data.encode() if isinstance(data, str) else data
     options = RewriteOptions(emit=emit, force=True)
     columns = rewrite_source(data, name, comp, options)
@@ -213,6 +236,13 @@ def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeyp
     one_by_one = rewrite_source(data, name, comp, options)
     assert columns.data == one_by_one.data
     assert one_by_one.moves_compensated == columns.moves_compensated
+    if name == "arcs" and emit == "jointtargets":  # every variant got intermediate points
+        out = columns.data.decode()
+        assert columns.points_added > 50
+        for shown in ["MoveAbsJ \\Conc, jt_", "_1, vFeed, z0, tMill", "_1, vFeed, z0 , tMill",
+                      "_1, vFeed , z0, tMill", "_1, vFeed, ! zone next\n      z0,",
+                      "_1, vFeed,z0 , tMill"]:
+            assert shown in out, shown
     assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm
     if name == "filtered_cases" and emit == "robtargets":
         # every way a filtered robtarget is written was taken

@@ -485,3 +485,72 @@ def assert_parses_as_plain(text: str) -> None:
             parse_text(text)
         return
     assert shape(parse_text(text)) == expected
+
+
+# ------------------------------------------------------- comments inside statements
+def _blanked_by_hand(text: str) -> str:
+    """blank_comments, written as a lexer reads the text character by character: a
+    string (rapid.lark's STRING) or the `%%%` header at the start is taken whole, a `!`
+    elsewhere starts a comment to the end of its line."""
+    string = re.compile(r'"(?:[^"\r\n]|"")*"')
+    out, i, at_start = list(text), 0, True
+    while i < len(text):
+        c = text[i]
+        if c == "!":
+            end = text.find("\n", i)
+            end = len(text) if end < 0 else end
+            out[i:end] = [" " if ch != "\r" else ch for ch in text[i:end]]
+            i = end
+            continue
+        m = string.match(text, i) if c == '"' else None
+        if m is not None:
+            i, at_start = m.end(), False
+            continue
+        if at_start and text.startswith("%%%", i) and text.find("%%%", i + 3) >= 0:
+            i, at_start = text.find("%%%", i + 3) + 3, False
+            continue
+        at_start = at_start and c in " \t\f\v\r\n\x1a"
+        i += 1
+    return "".join(out)
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(st.sampled_from(["!", '"', "a", " ", "\n", "\r", "%%%", '""', "%"]),
+                max_size=30))
+def test_comments_are_blanked_where_the_lexer_reads_comments(pieces):
+    from rapidfix.rapid.fastpath import blank_comments
+
+    text = "".join(pieces)
+    assert blank_comments(text) == _blanked_by_hand(text)
+
+
+INNER = [
+    "MoveL p1, v100, z1, tool0;",
+    "MoveL Offs(p1, 0, 0, -10), v100, fine, tool0 \\WObj:=w;",
+    f"MoveJ {TARGET}, v100, z1, tool0;",
+    "MoveC c1, p2, v100, z1, tool0;",
+    'TPWrite "stop! now" \\Num:=1;',
+    'TPWrite "say ""hi!""";',
+    "x := Offs(p1, 1, 2, 3);",
+    f"CONST robtarget q:={TARGET};",
+]
+
+
+@pytest.mark.parametrize("piece", INNER)
+def test_a_comment_inside_a_statement_keeps_it_in_the_fast_run(piece):
+    """A comment in place of any space of a statement (never inside its strings): the
+    plain grammar's tree, and calls stay fast-run nodes (LazyCall), not the plain
+    grammar's."""
+    strings = [m.span() for m in re.finditer(r'"(?:[^"]|"")*"', piece)]
+    spaces = [i for i, c in enumerate(piece) if c == " "
+              and not any(a <= i < b for a, b in strings)]
+    assert spaces
+    for i in spaces:
+        statement = piece[:i] + " ! note \"x\" !\n   " + piece[i + 1:]
+        text = (module(statement) if piece.startswith("CONST")
+                else routine("Stop;", statement, "Stop;"))
+        tree = parse_text(text)
+        assert shape(tree) == plain_tree(text)
+        if not piece.startswith(("CONST", "x :=")):
+            body = tree.modules[0].items[0].body
+            assert [type(node) for node in body] == [s.LazyCall] * 3, statement
