@@ -502,6 +502,11 @@ def _index_node(text: str, start: int) -> s.Index:
     open_at = text.index("{")
     name = text[:open_at].rstrip(_WS_CHARS)
     base = s.NameRef(start, start + len(name), sys.intern(name))
+    inner = text[open_at + 1:-1]
+    if inner.isdigit() and inner.isascii():  # `path{12}`: one decimal index, as _value_node
+        at = start + open_at + 1
+        return s.Index(start, start + len(text), base,
+                       [s.Number(at, at + len(inner), float(inner), inner)])
     indices = [_value_node(m.group(), start + m.start())
                for m in _INDEX_ITEM.finditer(text, open_at + 1)]
     return s.Index(start, start + len(text), base, indices)

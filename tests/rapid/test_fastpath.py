@@ -434,6 +434,9 @@ PIECES = [
     "MoveL pÑ,v100,z1,tool0;",
     "MoveC c1,p2,v100,z1,tool0;",
     "MoveL path{1},v100,z1,tool0;",
+    "MoveL path{007},v100,z1,tool0;",
+    "MoveL path{ 2 },v100,z1,tool0;",
+    "MoveL path{0x2},v100,z1,tool0;",
     "Foo grid{i, 2}, [[[1,2]],[[3]]];",
     "Foo [[[1,2]],[3]];",
     "MoveC Offs(c1,0,1,0), p3 ,v100,z1,tool0;",
@@ -554,3 +557,9 @@ def test_a_comment_inside_a_statement_keeps_it_in_the_fast_run(piece):
         if not piece.startswith(("CONST", "x :=")):
             body = tree.modules[0].items[0].body
             assert [type(node) for node in body] == [s.LazyCall] * 3, statement
+
+
+@pytest.mark.parametrize("index", ["1", "007", " 2 ", "0x2", "i", "n{1}", "1, 2", "١"])
+def test_array_elements_are_read_as_the_grammar_reads_them(index):
+    text = routine(f"MoveL path{{{index}}},v100,z1,tool0;", f"x := path{{{index}}};")
+    assert_parses_as_plain(text)
