@@ -406,28 +406,24 @@ class ModelBuilder:
     def _named_call_fields(self, expr: s.LazyFunctionCall, type_hint: str | None, module: str,
                            routine: str | None) -> tuple | None:
         """_operand_fields of a function call of a data name and literals (see
-        Evaluator.named_call), or None for any other call. The name is looked up once,
-        for its value and its declaration."""
+        Evaluator.named_call), or of such a call and literals (`Offs(RelTool(p,0,0,5),
+        0,0,10)`), or None for any other call. A name is looked up once, for its value
+        and its declaration."""
         head = expr.head
-        if head is None or type(head.value) is not s.NameRef or not self.settled:
+        if head is None or not self.settled:
             return None
-        name_ref = head.value
-        found = self._find(name_ref.name.lower(), module, routine)
-        evaluator = self._evaluator(module, routine)
-        first: object
-        if type(found) is Declaration:  # resolved: what the evaluator's lookup gives
-            if found.static and found.value is not None:
-                first = found.value
-            else:
-                first = NotConstant(f"{found.name}: {found.reason}")
+        inner = head.value
+        found: Declaration | None = None
+        if type(inner) is s.NameRef:
+            first, found = self._name_value(inner, module, routine)
+        elif type(inner) is s.LazyFunctionCall:
+            first = self._nested_value(inner, module, routine, 1)
+            if first is None:
+                return None
         else:
-            found = None
-            try:
-                first = evaluator.lookup(name_ref.name)[0]
-            except NotConstant as err:
-                first = err
+            return None
         try:
-            typed = evaluator.named_call(expr, first)
+            typed = self._evaluator(module, routine).named_call(expr, first)
         except NotConstant as err:
             fields = (None, type_hint, False, err.reason)
         else:
@@ -436,8 +432,49 @@ class ModelBuilder:
             fields = self._fitted(*typed, type_hint)
         key = expr.key
         if key == "offs" or key == "reltool":
-            return (key, name_ref.name, fields[1], fields[0], fields[2], fields[3], found)
+            name = inner.name if type(inner) is s.NameRef else None
+            return (key, name, fields[1], fields[0], fields[2], fields[3], found)
         return ("expression", None, fields[1], fields[0], fields[2], fields[3], None)
+
+    def _name_value(self, name_ref: s.NameRef, module: str, routine: str | None
+                    ) -> tuple[object, Declaration | None]:
+        """(the value the evaluator's lookup gives a name, or the NotConstant it raises;
+        the name's resolved declaration or None)."""
+        found = self._find(name_ref.name.lower(), module, routine)
+        if type(found) is Declaration:  # resolved: what the evaluator's lookup gives
+            if found.static and found.value is not None:
+                return found.value, found
+            return NotConstant(f"{found.name}: {found.reason}"), found
+        try:
+            return self._evaluator(module, routine).lookup(name_ref.name)[0], None
+        except NotConstant as err:
+            return err, None
+
+    #: calls nested deeper than this inside a call's first argument go the general route
+    _NESTED_CALLS = 8
+
+    def _nested_value(self, call: s.LazyFunctionCall, module: str, routine: str | None,
+                      depth: int) -> object | None:
+        """The value of a call standing as another call's first argument (or the
+        NotConstant the evaluator raises for it), when it is a call of a data name or of
+        such a call, and literals; None for any other (then the general route decides)."""
+        head = call.head
+        if head is None or depth > self._NESTED_CALLS:
+            return None
+        inner = head.value
+        if type(inner) is s.NameRef:
+            first = self._name_value(inner, module, routine)[0]
+        elif type(inner) is s.LazyFunctionCall:
+            first = self._nested_value(inner, module, routine, depth + 1)
+            if first is None:
+                return None
+        else:
+            return None
+        try:
+            typed = self._evaluator(module, routine).named_call(call, first)
+        except NotConstant as err:
+            return err
+        return None if typed is None else typed[0]
 
     def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,
                         routine: str | None) -> tuple:

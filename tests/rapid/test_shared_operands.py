@@ -234,6 +234,49 @@ ENDMODULE
     assert any(isinstance(m.syntax.args[0].value, s.LazyFunctionCall) for m in program.motions)
 
 
+def test_calls_of_calls_read_in_one_step_give_the_general_model():
+    """A call whose first argument is itself such a call (`Offs(RelTool(p1,0,0,1),0,0,2)`),
+    nested up to the limit and past it, with every refusal at each level: the plain
+    grammar's operands, values and reasons."""
+    deep = "p1"
+    for level in range(12):
+        deep = f"Offs({deep},0,0,{level})"
+    text = f"""MODULE M
+  PERS tooldata gun:={TOOL};
+  CONST robtarget p1:={TARGET};
+  VAR robtarget moving:={TARGET};
+  CONST jointtarget j1:=[[0,0,0,0,30,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];
+  CONST num dz:=5;
+  PROC r(robtarget given)
+    MoveL Offs(RelTool(p1,0,0,1),0,0,2),v100,z1,gun;
+    MoveL RelTool(Offs(p1,1,2,3),0,0,1\\Rz:=90),v100,z1,gun;
+    MoveL Offs(RelTool(Offs(p1,0,0,1),0,0,1),-1,0,0),v100,z1,gun;
+    MoveL Offs(RelTool(moving,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(nowhere,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(given,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(j1,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0,1),0,0),v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0,dz),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0,1),0,0,dz),v100,z1,gun;
+    MoveL Offs(Shifted(p1,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(CRobT(\\Tool:=gun),0,0,2),v100,z1,gun;
+    MoveL Shifted(Offs(p1,0,0,1),0,0,2),v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0,1\\Rz),0,0,2),v100,z1,gun;
+    MoveL {deep},v100,z1,gun;
+    MoveL Offs(RelTool(p1,0,0,1),0,0,2),v100,z1,gun;
+  ENDPROC
+ENDMODULE
+"""
+    program = assert_same_model(text)
+    targets = [m.target for m in program.motions]
+    assert sum(t.static for t in targets) >= 5 and sum(not t.static for t in targets) >= 8
+    assert targets[0].value == targets[-1].value and targets[0].form == "offs"
+    nested = [m for m in program.motions if isinstance(m.syntax.args[0].value, s.LazyFunctionCall)
+              and isinstance(m.syntax.args[0].value.head.value, s.LazyFunctionCall)]
+    assert len(nested) >= 10
+
+
 def test_forgetting_the_texts_empties_every_memo_the_fast_path_keeps():
     """forget_texts gives back the memory of every text kept across files (tails, their
     values, expressions, aggregate rests, number groups)."""
