@@ -56,8 +56,9 @@ from rapidfix.postprocess.verify import predicted_deviation, read_back
 from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
-#: programs with this many moves or more are solved with the compiled kernels (numba)
-COMPILED_FROM_MOVES = 10_000
+#: programs of this much kernel work or more are solved with the compiled kernels (numba):
+#: their moves, an arc counting four (see `kernel_work`)
+COMPILED_FROM_WORK = 40_000
 
 
 @dataclass(frozen=True)
@@ -330,7 +331,7 @@ def rewrite_source(
     """Compensate one program given as bytes; returns the new bytes and what was done."""
     with cyclic_gc_paused():
         program = parse_program(data, filename)
-        moves = len(program.motions)
+        moves = kernel_work(program)
         # _rewrite holds the only reference, so the program model is freed where it lets
         # it go (before the read-back), not after the collector is back on: then its
         # first collection would walk every object of the model once more
@@ -340,14 +341,23 @@ def rewrite_source(
             return _rewrite(handed, data, filename, comp, options)
 
 
+def kernel_work(program: Program) -> int:
+    """How much of the compiled kernels' work a program makes: one per move, four per
+    arc (its circle point, and the points its path check samples and inserts)."""
+    motions = program.motions
+    return len(motions) + 3 * sum(1 for motion in motions if len(motion.targets) == 2)
+
+
 @contextmanager
 def _kernels_for(moves: int) -> Iterator[None]:
     """The compiled kernels (IK, forward kinematics, RBF sums) for a program of at least
-    COMPILED_FROM_MOVES moves, numpy's below: their one-time load costs more than they
-    save on a small program. Chosen by the program alone, so the same program gives the
-    same bytes whatever a process (a batch worker) rewrote before."""
+    COMPILED_FROM_WORK of `kernel_work`, numpy's below: their one-time load (numba, the
+    scipy.linalg it imports, its registries: about 0.4 s of CPU and 110 MB) costs more than
+    they save, about 10 µs a move, on a smaller program. Chosen by the program alone, so
+    the same program gives the same bytes whatever a process (a batch worker) rewrote
+    before."""
     with ExitStack() as stack:
-        if moves >= COMPILED_FROM_MOVES:
+        if moves >= COMPILED_FROM_WORK:
             stack.enter_context(compiled_sums())
             stack.enter_context(compiled_forward())
         else:

@@ -39,22 +39,38 @@ def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell
 
 
 def test_small_programs_solve_in_numpy_large_ones_with_the_compiled_kernels(cell):
-    """The compiled kernels' one-time load (about half a second) costs more than they save
-    on a small program: below COMPILED_FROM_MOVES moves the rewrite stays in numpy. The
-    choice is the program's alone, not what the process ran before."""
+    """The compiled kernels' one-time load (about 0.4 s) costs more than they save on a
+    small program: below COMPILED_FROM_WORK (moves, an arc counting four) the rewrite
+    stays in numpy. The choice is the program's alone, not what the process ran before."""
     from rapidfix.error_model import joint_rbf
     from rapidfix.kinematics import ik, screws
     from rapidfix.postprocess import rewrite
 
     robot = cell["robot"]
     assert robot.is_nominal
-    with rewrite._kernels_for(rewrite.COMPILED_FROM_MOVES - 1):
+    with rewrite._kernels_for(rewrite.COMPILED_FROM_WORK - 1):
         assert ik.backend_for(robot) == "numpy"
         assert not screws._COMPILED.get() and not joint_rbf._COMPILED.get()
-    with rewrite._kernels_for(rewrite.COMPILED_FROM_MOVES):
+    with rewrite._kernels_for(rewrite.COMPILED_FROM_WORK):
         assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
         assert screws._COMPILED.get() and joint_rbf._COMPILED.get()
     assert ik.backend_for(robot) == ("numba" if ik.accelerated() else "numpy")
+
+
+def test_the_kernels_are_chosen_by_the_moves_an_arc_counting_four():
+    """An arc's circle point, and the points its path check samples and inserts, make
+    it about four moves' work of the kernels; other instructions count once."""
+    from rapidfix.postprocess.rewrite import kernel_work
+    from rapidfix.rapid import parse_program
+
+    text = "\n".join([
+        "MODULE M", "PROC main()",
+        "  MoveL p1, v100, z1, tool0;", "  MoveJ p2, v100, z1, tool0;",
+        "  MoveC p1, p2, v100, z1, tool0;", "  MoveC Offs(p1,0,1,0), p2, v100, fine, tool0;",
+        "  MoveAbsJ j1, v100, z1, tool0;", "  SetDO do1, 1;",
+        "  TriggC p1, p2, v100, t1, z1, tool0;",
+        "ENDPROC", "ENDMODULE", ""])
+    assert kernel_work(parse_program(text, "arcs.mod")) == 3 + 4 * 3
 
 
 def test_a_target_on_a_wrong_branch_names_the_nearest_confdata_that_reach_it(cell):
