@@ -433,6 +433,10 @@ def _value_node(text: str, start: int) -> s.Expr:
     name, a number, a numeric aggregate, a negated number, a function call, TRUE/FALSE
     or a whole string; any other (arithmetic, components, aggregates of expressions)
     from fast_expressions."""
+    if text[0] == "[":
+        inline = _inline_target(text, start)
+        if inline is not None:
+            return inline
     if len(text) <= 5 and text.upper() in _BOOLS:
         return s.Bool(start, start + len(text), _BOOLS[text.upper()])
     if text[0] == '"' and _WHOLE_STRING.fullmatch(text):
@@ -447,8 +451,10 @@ def _value_node(text: str, start: int) -> s.Expr:
                 return _deep_aggregate(text, start, _RESTS)
             # an inline target: its position read, the rest once per distinct text
             grouped = grouped_value(text, _RESTS) if text.startswith("[[") else None
-            return s.NumericAggregate(start, end, grouped if grouped is not None
-                                      else aggregate_value(text))
+            if grouped is not None:
+                _PLAIN_RESTS.keep(text[text.find("]") + 1:], grouped[1:])
+                return s.NumericAggregate(start, end, grouped)
+            return s.NumericAggregate(start, end, aggregate_value(text))
         except NotFast:  # the loose pattern let arithmetic through: [1-1,2]
             return _read(text, start)
     if first.isdigit() or first == ".":
@@ -465,6 +471,24 @@ def _value_node(text: str, start: int) -> s.Expr:
 
 
 _WHOLE_STRING = re.compile(STRING)
+_NUMBER_GROUP = re.compile(r"[-+0-9.eE, \t\f\v\r\n\x1a]*")
+
+
+def _inline_target(text: str, start: int) -> s.NumericAggregate | None:
+    """The node of `[[x,y,z],...]` whose text after its first group is one `_value_node`
+    has read as a plain aggregate already (a CAM program's inline targets differ in
+    their position), or None: then `_value_node` reads it in full."""
+    cut = text.find("]")
+    items = _PLAIN_RESTS.get(text[cut + 1:])
+    if items is None or not text.startswith("[[") or not _NUMBER_GROUP.fullmatch(text, 2, cut):
+        return None
+    try:
+        group = tuple(map(float, text[2:cut].split(",")))
+    except ValueError:  # not numbers after all: read in full, as before
+        return None
+    return s.NumericAggregate(start, start + len(text), (group, *items))
+
+
 def _read(text: str, start: int) -> s.Expr:
     """read_expression(text, start) of a condition (NotFast where it gives up). A program
     repeats its expressions (`nCount + 1`, `nCount < 3`): each text is read once, and
@@ -804,6 +828,10 @@ def shared_aggregate_value(text: str, rests: Memo) -> tuple:
 # What follows the leading group of an aggregate, read once (see shared_aggregate_value);
 # kept across tokens and files like the call tails.
 _RESTS: Memo = Memo(TAIL_LIMIT)
+# What follows the first group of inline targets `_value_node` has read as plain two-level
+# aggregates (`],[q1,q2,q3,q4],[cf1,...],[e1,...]]`) -> its items: the same text after a
+# group of numbers is then such an aggregate again, without matching it whole.
+_PLAIN_RESTS: Memo = Memo(TAIL_LIMIT)
 
 
 # A storage keyword as written -> as the grammar gives it ('const' -> 'CONST'): one string
@@ -861,7 +889,7 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

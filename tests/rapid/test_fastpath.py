@@ -563,3 +563,21 @@ def test_a_comment_inside_a_statement_keeps_it_in_the_fast_run(piece):
 def test_array_elements_are_read_as_the_grammar_reads_them(index):
     text = routine(f"MoveL path{{{index}}},v100,z1,tool0;", f"x := path{{{index}}};")
     assert_parses_as_plain(text)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.sampled_from(["1,2,3", " 1 , -2 ,3E2 ", "+1.5,.5,5.", "1e5,2E-3,-0",
+                                 "a,b,c", "1+1,2,3", "1,,2", "1 2,3,4", "\x1a1,2,3", "1,2",
+                                 "-1,-2,-3,-4", "x.y,2,3", "1,2,3e", "", "inf,0,0"]),
+                min_size=1, max_size=6),
+       st.sampled_from(["[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]",
+                        "[1,0,0,0],[0,-1,2,0]", "[1, 0, 0, 0], conf, [1]"]))
+def test_inline_targets_after_a_known_rest_are_read_as_the_grammar_reads_them(groups, rest):
+    """Once a rest (all after the first group) has been read as a plain aggregate, an
+    inline target with the same rest after any first group gives the grammar's tree."""
+    from rapidfix.rapid.fastpath import forget_texts
+
+    forget_texts()
+    known = f"MoveL [[0,0,0],{rest}],v100,z1,tool0;"  # the rest, read as a plain aggregate
+    for group in groups:  # each in a program of its own: a bad one fails alone
+        assert_parses_as_plain(routine(known, f"MoveL [[{group}],{rest}],v100,z1,tool0;"))
