@@ -14,6 +14,10 @@ timed steps for both trees, and checks that both wrote the same bytes. The sets:
 - language: the odd shapes `messages` and `conditions` (strings, conditions, the heads
   of compound statements) and `control` at 20,000 lines, and `rapidfix check` of the
   sample cell program (a small file: start-up); timed the parse.
+- rewrite: the three shapes furthest from the rewrite target (`inline`, `offs`, `movec`)
+  at 200,000 lines, `named` at 60,000 and the odd shapes `five_axis` and `feeds` at
+  20,000 (programs below the compiled kernels' threshold); timed the parse, the plan,
+  the path check and the emission.
 """
 
 from __future__ import annotations
@@ -47,6 +51,14 @@ CASES = {
         ("control 20k", "control", 20_000, False, "jointtargets"),
         ("check samples/cell.mod", "cell", 0, False, "check"),
     ),
+    "rewrite": (
+        ("inline 200k", "inline", 200_000, False, "jointtargets"),
+        ("offs 200k", "offs", 200_000, False, "jointtargets"),
+        ("movec 200k", "movec", 200_000, False, "jointtargets"),
+        ("named 60k", "named", 60_000, False, "jointtargets"),
+        ("five_axis 20k", "five_axis", 20_000, True, "jointtargets"),
+        ("feeds 20k", "feeds", 20_000, True, "jointtargets"),
+    ),
 }
 # what the child process times (CPU seconds, summed over calls), per set
 _TIMED = {
@@ -54,6 +66,8 @@ _TIMED = {
                  ("rapidfix.postprocess.emission", "_Emitter", "_filtered"),
                  ("rapidfix.postprocess.emission", None, "count_identifiers")),
     "language": (("rapidfix.rapid.parse", None, "parse_source"),),
+    "rewrite": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
+                     ("parse_program", "plan_program", "refine_paths", "emit_edits")),
 }
 
 
