@@ -52,6 +52,7 @@ from rapidfix.rapid.fastpath import (
     Memo,
     NotFast,
     aggregate_value,
+    blank_comments,
     cached_extension,
     declaration_pattern,
 )
@@ -224,8 +225,11 @@ def read_bulk(text: str) -> BulkProgram | None:
     The text is parsed by Lark with the grammar and the fast terminals; None when it
     does not parse that way or holds anything but data declarations without
     dimensions and procedure calls whose arguments are names, numbers, numeric
-    aggregates and optional arguments (then parse it with `parse_program`).
+    aggregates and optional arguments (then parse it with `parse_program`). Comments
+    are read as the whitespace they are to the grammar (`blank_comments`), so a
+    statement with one inside stays in its run.
     """
+    text = blank_comments(text)
     try:
         tree: s.SourceFile = run_parser().parse(text)
     except (UnexpectedInput, NotFast):

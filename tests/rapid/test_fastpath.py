@@ -581,3 +581,35 @@ def test_inline_targets_after_a_known_rest_are_read_as_the_grammar_reads_them(gr
     known = f"MoveL [[0,0,0],{rest}],v100,z1,tool0;"  # the rest, read as a plain aggregate
     for group in groups:  # each in a program of its own: a bad one fails alone
         assert_parses_as_plain(routine(known, f"MoveL [[{group}],{rest}],v100,z1,tool0;"))
+
+
+def test_the_bulk_reader_takes_comments_inside_statements_as_the_model_does():
+    """The read-back's bulk reader reads a rewritten program with comments inside its
+    statements and declarations (kept from the original) in its runs, with the targets
+    the full program model gives."""
+    import numpy as np
+
+    from rapidfix.rapid.readback import read_bulk, read_targets_full, read_targets_in_bulk
+
+    joints = "[[1,2,3,4,5,6],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = module(
+        f"CONST jointtarget j1:={joints};",
+        "CONST jointtarget j2:= ! its value next\n  [[1,2,3,4,5,7],"
+        "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]; ! \"quoted\"",
+        f"CONST robtarget p1:={TARGET};",
+        "PROC main()",
+        "  MoveAbsJ j1, ! to j1 \"x\n    v100, z1, tool0;",
+        "  MoveAbsJ j2,\n    v100, ! speed\n    fine, tool0 \\WObj:=w; ! done",
+        "  MoveL p1, v100, ! z\n z1, tool0;",
+        "ENDPROC")
+    assert read_bulk(text) is not None
+    program = parse_program(text, "commented.mod")
+    motion = np.arange(len(program.motions))
+    slot = np.zeros(len(motion), dtype=np.int64)
+    bulk = read_targets_in_bulk(text, list(range(len(program.motions))), motion, slot)
+    full = read_targets_full(program.motions, motion, slot)
+    assert bulk is not None
+    for name in ("joint", "robax", "trans", "rot", "conf"):
+        assert np.array_equal(getattr(bulk, name), getattr(full, name)), name
+    assert bulk.joint.tolist() == [True, True, False]
+    assert bulk.robax[1].tolist() == [1, 2, 3, 4, 5, 7]
