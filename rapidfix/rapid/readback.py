@@ -307,7 +307,8 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], motion: np.ndarray,
     layouts: dict[str, tuple[tuple[int, ...], str]] = {}
     joint_rows: list[int] = []
     joint_texts: list[str] = []
-    rob_values: dict[str, tuple] = {}
+    rob_rows: list[int] = []
+    rob_texts: list[str] = []
     for i, (c, run, which) in enumerate(zip(call_of_row, run_of_row, slot.tolist())):
         name, first, _rest = calls[c]
         layout = layouts.get(name)
@@ -341,15 +342,16 @@ def _read_bulk_targets(bulk: BulkProgram, order: list[int], motion: np.ndarray,
             joint_rows.append(i)
             joint_texts.append(text)
         elif type_name == "robtarget":
-            value = rob_values.get(text)
-            if value is None:
-                value = rob_values[text] = _robtarget_value(text)
-            out.trans[i], out.rot[i], out.conf[i] = value
+            rob_rows.append(i)
+            rob_texts.append(text)
         else:
             raise NotBulk
     if joint_rows:
         out.joint[joint_rows] = True
         out.robax[joint_rows] = joint_values(joint_texts)
+    if rob_rows:
+        out.trans[rob_rows], out.rot[rob_rows], out.conf[rob_rows] = robtarget_values(
+            rob_texts)
     return out
 
 
@@ -376,6 +378,45 @@ def _jointtargets_named_first(bulk: BulkProgram, call_of_row: list[int], slot: n
     out.joint[:] = True
     out.robax[:] = joint_values([text for _, text in found])
     return out
+
+
+_NUMBERS = "[-+0-9.eE]+"
+# A robtarget literal as the rewrite writes it (no whitespace): its numbers are read as
+# joint_values reads a jointtarget's.
+_ROBTARGET_LITERAL = re.compile(
+    rf"\[\[({_NUMBERS}(?:,{_NUMBERS}){{2}})\],\[({_NUMBERS}(?:,{_NUMBERS}){{3}})\],"
+    rf"\[({_NUMBERS}(?:,{_NUMBERS}){{3}})\],\[({_NUMBERS}(?:,{_NUMBERS}){{5}})\]\]")
+
+
+def robtarget_values(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(trans (K,3), rot (K,4), conf (K,4)) of robtarget literals, as `_robtarget_value`
+    reads each: those written without whitespace (what the rewrite writes) in one pass,
+    any other one by one. Raises NotBulk where it does."""
+    match = _ROBTARGET_LITERAL.fullmatch
+    groups: list[str] = []
+    extax_ok: dict[str, bool] = {}
+    for text in texts:
+        m = match(text)
+        if m is None:
+            break
+        trans, rot, conf, extax = m.groups()
+        ok = extax_ok.get(extax)
+        if ok is None:
+            ok = extax_ok[extax] = _numbers(extax)
+        if not ok:
+            raise NotBulk
+        groups += (trans, rot, conf)
+    else:
+        try:
+            values = np.array(",".join(groups).split(","), dtype=float).reshape(-1, 11)
+        except ValueError:
+            raise NotBulk from None
+        if not np.isfinite(values[:, 7:]).all():  # a confdata fits_type refuses
+            raise NotBulk
+        return values[:, :3], values[:, 3:7], values[:, 7:]
+    distinct = {text: _robtarget_value(text) for text in texts}
+    trans, rot, conf = zip(*map(distinct.__getitem__, texts))
+    return np.array(trans, dtype=float), np.array(rot, dtype=float), np.array(conf, dtype=float)
 
 
 def _robtarget_value(text: str) -> tuple:

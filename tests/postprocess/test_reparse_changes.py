@@ -276,6 +276,32 @@ def test_jointtarget_literals_are_read_back_in_one_pass_or_left_to_the_full_rout
             joint_values([*good[:5], bad, *good[:300]])
 
 
+def test_robtarget_literals_are_read_back_in_one_pass_as_one_by_one():
+    """robtarget_values gives what _robtarget_value (the exact reader) gives each literal,
+    in one pass for the rewrite's compact form and one by one for any other, and refuses
+    (NotBulk) what it refuses."""
+    from rapidfix.rapid.readback import NotBulk, _robtarget_value, robtarget_values
+
+    compact = ["[[1,-2.5,3E+02],[1,0,0,0],[0,-1,2,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
+               "[[.5,1.,-0],[0.5,0.5,0.5,0.5],[1,1,1,1],[0,0,0,0,0,1e999]]"] * 200
+    spaced = "[[1, 2, 3], [1,0,0,0], [0,0,0,0], [0,0,0,0,0,0]]"
+    for texts in (compact, [*compact[:3], spaced, *compact[:3]]):
+        got = robtarget_values(texts)
+        want = [np.array(part, dtype=float) for part in zip(*map(_robtarget_value, texts))]
+        for g, w in zip(got, want):
+            assert np.array_equal(g, w)
+    for bad in ["[[1.2.3,0,0],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]",
+                "[[1e,0,0],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]",
+                "[[0,0,0],[1,0,0,0],[0,1e999,0,0],[0,0,0,0,0,0]]",
+                "[[0,0,0],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,1e]]",
+                "[[0,0,0],[1,0,0,0],[0,0,0,0],[0,0,0,0,0]]", "[[0,0,0],[1,0,0,0],[0,0,0,0]]",
+                "[[0,0],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]"]:
+        with pytest.raises(NotBulk):
+            _robtarget_value(bad)
+        with pytest.raises(NotBulk):
+            robtarget_values([*compact[:5], bad, *compact[:5]])
+
+
 # ------------------------------------------------------------- the read-back in columns
 def _units(declarations, statements):
     """Check units with jointtarget declarations (module level of M) and MoveAbsJ
