@@ -64,6 +64,8 @@ class Evaluator:
             return expr.value, "num"
         if kind is s.LazyFunctionCall:
             return self._lazy_call(expr)
+        if kind is s.Index:  # `path{12}`: an array of targets, element by element
+            return self._index(expr)
         if isinstance(expr, s.NumericAggregate):
             return expr.value, None
         if isinstance(expr, s.Number):
