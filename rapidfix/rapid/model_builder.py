@@ -215,7 +215,10 @@ class ModelBuilder:
                     try:
                         found = self._lookup(name, module, routine)
                     except NotConstant as err:
-                        found = err
+                        # kept without its traceback: that holds the frames down to this
+                        # one, and with them the builder and its program, in a cycle only
+                        # the collector frees (never, once a large build is frozen)
+                        found = NotConstant(err.reason)
                     if self.settled:
                         known[name] = found
                 if type(found) is NotConstant:
@@ -447,8 +450,8 @@ class ModelBuilder:
             return NotConstant(f"{found.name}: {found.reason}"), found
         try:
             return self._evaluator(module, routine).lookup(name_ref.name)[0], None
-        except NotConstant as err:
-            return err, None
+        except NotConstant as err:  # without its traceback (see _evaluator)
+            return NotConstant(err.reason), None
 
     #: calls nested deeper than this inside a call's first argument go the general route
     _NESTED_CALLS = 8
@@ -472,8 +475,8 @@ class ModelBuilder:
             return None
         try:
             typed = self._evaluator(module, routine).named_call(call, first)
-        except NotConstant as err:
-            return err
+        except NotConstant as err:  # without its traceback (see _evaluator)
+            return NotConstant(err.reason)
         return None if typed is None else typed[0]
 
     def _operand_fields(self, expr: s.Expr, type_hint: str | None, module: str,

@@ -319,6 +319,36 @@ def test_the_builder_is_freed_by_reference_counting_alone():
             gc.enable()
 
 
+@pytest.mark.parametrize("body", [
+    "  MoveL target, v100, z10, tool0;",  # a parameter: not known before run time
+    "  MoveL Offs(target, 0, 0, 1), v100, z10, tool0;",
+    "  MoveL Offs(RelTool(target, 0, 0, 1), 0, 0, 1), v100, z10, tool0;",
+    "  MoveL Offs(nowhere, d, 0, 0), v100, z10, tool0;",  # not declared
+    "  MoveL Offs(p, target.trans.x, 0, 0), v100, z10, tool0;",  # a parameter's component
+    "  FOR i FROM 1 TO 2 DO\n    MoveL path{i}, v100, z10, tool0;\n  ENDFOR",
+])
+def test_a_model_with_values_unknown_before_run_time_holds_no_cycle(body):
+    """What the evaluator cannot know raises NotConstant, whose traceback holds the
+    builder's frames: a reason kept from one (the lookups' cache, a call's first
+    argument) is kept without it, or the builder and the program it made would stand
+    in a cycle until a collection (never, once a large build is frozen)."""
+    target = f"[[1,2,3],[1,0,0,0],[0,0,0,0],{UNUSED}]"
+    text = (f"MODULE M\nCONST robtarget p := {target};\nCONST num d := 2;\n"
+            f"CONST robtarget path{{2}} := [{target},{target}];\n"
+            f"PROC r(robtarget target)\n{body}\n{body}\nENDPROC\nENDMODULE\n")
+    was_enabled = gc.isenabled()
+    gc.collect()
+    gc.disable()
+    try:
+        program = parse_program(text, "unknown.mod")
+        assert not program.motions[0].target.static and program.motions[0].target.reason
+        del program
+        assert gc.collect() == 0  # everything went with the last reference
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
 def _large_program(n: int = 300) -> str:
     data = "\n".join(f"CONST robtarget p{i} := [[{i},0,0],[1,0,0,0],[0,0,0,0],{UNUSED}];"
                      for i in range(n))
