@@ -1023,6 +1023,7 @@ _BEFORE_HEADER = re.compile(rf"(?:{WS}|![^\n]*)*")
 _PRG_HEADER = re.compile(r"%%%[\s\S]*?%%%")
 # A line read as the lexer reads it: strings whole, a comment's `!`, other characters.
 _LINE_LEXEMES = re.compile(rf"{STRING}|(!)|[^\"!\n]+|\"")
+_NOT_CR = re.compile(r"[^\r]")
 
 
 def blank_comments(text: str) -> str:
@@ -1059,7 +1060,7 @@ def blank_comments(text: str) -> str:
                 continue
         comment = text[at:end]
         pieces += (text[done:at], " " * len(comment) if "\r" not in comment
-                   else "".join("\r" if c == "\r" else " " for c in comment))
+                   else _NOT_CR.sub(" ", comment))
         done = end
         at = text.find("!", end)
     pieces.append(text[done:])

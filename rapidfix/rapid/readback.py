@@ -397,7 +397,7 @@ def robtarget_values(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarr
     extax_ok: dict[str, bool] = {}
     for text in texts:
         m = match(text)
-        if m is None:
+        if m is None:  # written otherwise (spaces, a line break): all one by one, below
             break
         trans, rot, conf, extax = m.groups()
         ok = extax_ok.get(extax)
@@ -406,7 +406,7 @@ def robtarget_values(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarr
         if not ok:
             raise NotBulk
         groups += (trans, rot, conf)
-    else:
+    else:  # every one compact
         try:
             values = np.array(",".join(groups).split(","), dtype=float).reshape(-1, 11)
         except ValueError:
