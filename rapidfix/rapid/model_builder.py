@@ -416,15 +416,10 @@ class ModelBuilder:
         if head is None or not self.settled:
             return None
         inner = head.value
-        found: Declaration | None = None
-        if type(inner) is s.NameRef:
-            first, found = self._name_value(inner, module, routine)
-        elif type(inner) is s.LazyFunctionCall:
-            first = self._nested_value(inner, module, routine, 1)
-            if first is None:
-                return None
-        else:
+        got = self._first_value(inner, module, routine, 1)
+        if got is None:
             return None
+        first, found = got
         try:
             typed = self._evaluator(module, routine).named_call(expr, first)
         except NotConstant as err:
@@ -456,6 +451,17 @@ class ModelBuilder:
     #: calls nested deeper than this inside a call's first argument go the general route
     _NESTED_CALLS = 8
 
+    def _first_value(self, expr: s.Expr | None, module: str, routine: str | None,
+                     depth: int) -> tuple[object, Declaration | None] | None:
+        """(value or NotConstant, declaration or None) of a call's first argument when it
+        is a data name or a call read in one step (`_nested_value`), else None."""
+        if type(expr) is s.NameRef:
+            return self._name_value(expr, module, routine)
+        if type(expr) is s.LazyFunctionCall:
+            value = self._nested_value(expr, module, routine, depth)
+            return None if value is None else (value, None)
+        return None
+
     def _nested_value(self, call: s.LazyFunctionCall, module: str, routine: str | None,
                       depth: int) -> object | None:
         """The value of a call standing as another call's first argument (or the
@@ -464,17 +470,11 @@ class ModelBuilder:
         head = call.head
         if head is None or depth > self._NESTED_CALLS:
             return None
-        inner = head.value
-        if type(inner) is s.NameRef:
-            first = self._name_value(inner, module, routine)[0]
-        elif type(inner) is s.LazyFunctionCall:
-            first = self._nested_value(inner, module, routine, depth + 1)
-            if first is None:
-                return None
-        else:
+        got = self._first_value(head.value, module, routine, depth + 1)
+        if got is None:
             return None
         try:
-            typed = self._evaluator(module, routine).named_call(call, first)
+            typed = self._evaluator(module, routine).named_call(call, got[0])
         except NotConstant as err:  # without its traceback (see _evaluator)
             return NotConstant(err.reason)
         return None if typed is None else typed[0]
