@@ -352,7 +352,7 @@ def kernel_work(program: Program) -> int:
 def _kernels_for(moves: int) -> Iterator[None]:
     """The compiled kernels (IK, forward kinematics, RBF sums) for a program of at least
     COMPILED_FROM_WORK of `kernel_work`, numpy's below: their one-time load (numba, the
-    scipy.linalg it imports, its registries: about 0.4 s of CPU and 110 MB) costs more than
+    scipy.linalg it imports, its registries: 0.4-0.7 s of CPU, 110 MB) costs more than
     they save, about 10 µs a move, on a smaller program. Chosen by the program alone, so
     the same program gives the same bytes whatever a process (a batch worker) rewrote
     before."""

@@ -39,7 +39,7 @@ def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell
 
 
 def test_small_programs_solve_in_numpy_large_ones_with_the_compiled_kernels(cell):
-    """The compiled kernels' one-time load (about 0.4 s) costs more than they save on a
+    """The compiled kernels' one-time load (0.4-0.7 s) costs more than they save on a
     small program: below COMPILED_FROM_WORK (moves, an arc counting four) the rewrite
     stays in numpy. The choice is the program's alone, not what the process ran before."""
     from rapidfix.error_model import joint_rbf
