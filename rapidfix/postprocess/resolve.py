@@ -57,7 +57,7 @@ class Site:
         """The instruction and its destination as written, for messages (a destination
         longer than a robtarget written inline cut short)."""
         target = self.targets[-1] if self.targets else None
-        text = target.text if target else ""
+        text = quoted(target.text) if target else ""
         if len(text) > LABEL_CHARS:
             text = text[:LABEL_CHARS - 4] + " ..."
         return f"{self.motion.name} {text}".strip()
@@ -65,6 +65,16 @@ class Site:
 
 #: the longest destination a message quotes whole
 LABEL_CHARS = 200
+
+
+def quoted(text: str) -> str:
+    """An operand's text as a one-line message quotes it: its comments left out and its
+    line breaks and runs of whitespace made one space (`Offs(p1, ! far⏎ 0,0,1)`)."""
+    if "!" in text:  # the fast path's module, imported only where a comment may be
+        from rapidfix.rapid import blank_comments
+
+        text = blank_comments(text)
+    return " ".join(text.split())
 
 
 @dataclass
@@ -219,7 +229,7 @@ def operand_label(operands: list[Operand], operand: Operand) -> str:
     """'' for the destination (the site's label names it), else 'CirPoint p20: '."""
     if operand is operands[-1]:
         return ""
-    return f"{operand.argument.name or 'CirPoint'} {operand.text}: "
+    return f"{operand.argument.name or 'CirPoint'} {quoted(operand.text)}: "
 
 
 def _instruction_kind(motion: MotionInstruction, emit: str) -> tuple[bool, str, str | None]:

@@ -33,6 +33,7 @@ from rapidfix.rapid.values import (
 
 if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.rapid.edit import Editor
+    from rapidfix.rapid.fastpath import blank_comments
     from rapidfix.rapid.foreign_calls import foreign_target_calls
     from rapidfix.rapid.format import (
         format_declaration,
@@ -71,6 +72,7 @@ LAZY_EXPORTS = {
     "SYSTEM_DATA": "system_data",
     "Assignment": "syntax",
     "Editor": "edit",
+    "blank_comments": "fastpath",
     "NameRef": "syntax",
     "Node": "syntax",
     "Number": "syntax",
@@ -127,6 +129,7 @@ __all__ = [
     "ToolData",
     "WobjData",
     "ZoneData",
+    "blank_comments",
     "foreign_target_calls",
     "format_declaration",
     "format_jointtarget",
