@@ -331,13 +331,13 @@ def rewrite_source(
     """Compensate one program given as bytes; returns the new bytes and what was done."""
     with cyclic_gc_paused():
         program = parse_program(data, filename)
-        moves = kernel_work(program)
+        work = kernel_work(program)
         # _rewrite holds the only reference, so the program model is freed where it lets
         # it go (before the read-back), not after the collector is back on: then its
         # first collection would walk every object of the model once more
         handed = [program]
         del program
-        with _kernels_for(moves):
+        with _kernels_for(work):
             return _rewrite(handed, data, filename, comp, options)
 
 
@@ -349,7 +349,7 @@ def kernel_work(program: Program) -> int:
 
 
 @contextmanager
-def _kernels_for(moves: int) -> Iterator[None]:
+def _kernels_for(work: int) -> Iterator[None]:
     """The compiled kernels (IK, forward kinematics, RBF sums) for a program of at least
     COMPILED_FROM_WORK of `kernel_work`, numpy's below: their one-time load (numba, the
     scipy.linalg it imports, its registries: 0.4-0.7 s of CPU, 110 MB) costs more than
@@ -357,7 +357,7 @@ def _kernels_for(moves: int) -> Iterator[None]:
     the same program gives the same bytes whatever a process (a batch worker) rewrote
     before."""
     with ExitStack() as stack:
-        if moves >= COMPILED_FROM_WORK:
+        if work >= COMPILED_FROM_WORK:
             stack.enter_context(compiled_sums())
             stack.enter_context(compiled_forward())
         else:

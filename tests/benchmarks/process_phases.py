@@ -46,6 +46,20 @@ STEPS = (
 )
 
 
+def time_steps(spent: dict[str, float], steps: tuple[tuple[str, str, str], ...],
+               patch=setattr) -> None:
+    """Put a timer (`timed`) on each (label, module, attribute path) of `steps`, with
+    `patch` (setattr here; a test's monkeypatch.setattr, which undoes it after)."""
+    import importlib
+
+    for label, module_name, attribute in steps:
+        owner = importlib.import_module(module_name)
+        *path, name = attribute.split(".")
+        for part in path:
+            owner = getattr(owner, part)
+        patch(owner, name, timed(spent, label, getattr(owner, name)))
+
+
 def _time_kernel_imports() -> None:
     """Time the imports of the compiled kernels' modules (numba's import with them),
     which `rapidfix.compiled.load_kernel` makes through importlib.import_module."""
@@ -69,17 +83,10 @@ def _peak_kb() -> int:
 
 
 def main(argv: list[str]) -> int:
-    import importlib
-
     import rapidfix.cli as cli
 
     _time_kernel_imports()
-    for label, module_name, attribute in STEPS:
-        owner = importlib.import_module(module_name)
-        *path, name = attribute.split(".")
-        for part in path:
-            owner = getattr(owner, part)
-        setattr(owner, name, timed(_spent, label, getattr(owner, name)))
+    time_steps(_spent, STEPS)
     status = cli.main(argv)
     usage = resource.getrusage(resource.RUSAGE_SELF)
     total = usage.ru_utime + usage.ru_stime

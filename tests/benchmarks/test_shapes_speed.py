@@ -35,7 +35,7 @@ from lark import Lark
 sys.path.insert(0, str(Path(__file__).parent))
 from batch_timing import batch_timings
 from more_shapes import MORE_SHAPES, more_program
-from process_phases import timed
+from process_phases import time_steps
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
@@ -151,7 +151,7 @@ def test_rewrite_matrix(model_path, tmp_path):
     print(f"slowest: {min(r[2] for r in rows):,.0f} lines/s CPU (target 30,000)")
 
 
-_PHASES = (  # (label, module attribute path) of rewrite_source's steps, in order
+_PHASES = (  # (label, module, attribute) of rewrite_source's steps, in order
     ("parse + model", "rapidfix.postprocess.rewrite", "parse_program"),
     ("plan (IK, compensation)", "rapidfix.postprocess.rewrite", "plan_program"),
     ("path check", "rapidfix.postprocess.rewrite", "refine_paths"),
@@ -165,19 +165,11 @@ _PHASES = (  # (label, module attribute path) of rewrite_source's steps, in orde
 
 def test_rewrite_phases(model_path, tmp_path, monkeypatch):
     """CPU seconds of each step of `rewrite_file` in this (warm) process, per shape."""
-    import importlib
-
     from rapidfix.postprocess.compensator import Compensator
     from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
 
     spent: dict[str, float] = {}
-
-    for label, where, name in _PHASES:
-        module_name, _, owner = where.partition("._")
-        target = importlib.import_module(module_name)
-        if owner:
-            target = getattr(target, "_" + owner)
-        monkeypatch.setattr(target, name, timed(spent, label, getattr(target, name)))
+    time_steps(spent, _PHASES, monkeypatch.setattr)
     c = time.process_time()
     comp = Compensator.load(model_path)
     load = time.process_time() - c
