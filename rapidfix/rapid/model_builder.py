@@ -95,7 +95,7 @@ class _SharedTail:
         for (is_optional, key, first), arg in zip(self.entries,
                                                   motion.syntax.args[len(self.head_keys):]):
             (optional if is_optional else arguments)[key] = Operand(
-                arg, first.source, first.text, first.form, first.name, first.type_name,
+                arg, first.source, first.given_text, first.form, first.name, first.type_name,
                 first.value, first.static, first.reason, first.declaration)
         return arguments, optional
 
@@ -381,15 +381,15 @@ class ModelBuilder:
             return Operand(arg, self.source, "", form, static=arg.kind == "optional",
                            reason=None if arg.kind == "optional" else
                            "conditional argument is decided at run time")
-        text = self.source.text[expr.start:expr.end]
         if type(expr) is s.NumericAggregate:  # its value is read already; seldom repeated
             value = expr.value
             if type_hint is not None and fits_type(type_hint, value):
                 # an inline target of the instruction's type: what _operand_fields gives
-                return Operand(arg, self.source, text, "inline", None, type_hint, value,
+                return Operand(arg, self.source, None, "inline", None, type_hint, value,
                                True, None, None)
-            return Operand(arg, self.source, text, *self._operand_fields(
+            return Operand(arg, self.source, None, *self._operand_fields(
                 expr, type_hint, module, routine))
+        text = self.source.text[expr.start:expr.end]
         # the same text in the same scope has the same form, value and declaration
         # (every declaration is resolved before the motions are made): read it once
         texts = self.operand_texts.get((module, routine, type_hint))
@@ -402,9 +402,9 @@ class ModelBuilder:
                 # from move to move), read in one step and not kept
                 known = self._named_call_fields(expr, type_hint, module, routine)
                 if known is not None:
-                    return Operand(arg, self.source, text, *known)
+                    return Operand(arg, self.source, None, *known)
             known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
-        return Operand(arg, self.source, text, *known)
+        return Operand(arg, self.source, None, *known)
 
     def _named_call_fields(self, expr: s.LazyFunctionCall, type_hint: str | None, module: str,
                            routine: str | None) -> tuple | None:

@@ -94,7 +94,9 @@ class Operand:
 
     argument: s.Argument = field(repr=False)
     source: SourceText = field(repr=False)
-    text: str  # source text of the expression
+    # the expression's text when it was at hand (a data name), None: `text` reads it from
+    # the source when asked (a CAM program's inline targets would each keep a copy)
+    given_text: str | None
     form: str
     name: str | None = None  # the data name for form 'name' (and Offs/RelTool base)
     type_name: str | None = None
@@ -102,6 +104,15 @@ class Operand:
     static: bool = False
     reason: str | None = None
     declaration: Declaration | None = field(default=None, repr=False)
+
+    @property
+    def text(self) -> str:
+        """The source text of the expression ('' for a switch or a conditional argument)."""
+        text = self.given_text
+        if text is None:
+            value = self.argument.value
+            return "" if value is None else self.source.text[value.start:value.end]
+        return text
 
     # Spans are made when asked: a CAM program has millions of operands.
     @property

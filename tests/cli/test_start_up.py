@@ -9,6 +9,7 @@ import importlib
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 from rapidfix import cli
 
@@ -62,3 +63,34 @@ def test_the_fast_grammar_does_not_depend_on_the_hash_seed():
             "import hashlib\n"
             "print(hashlib.sha256(grammar_extension(grammar_text()).encode()).hexdigest())\n")
     assert _run(code, "1") == _run(code, "2") == _run(code, "3")
+
+
+def test_the_console_script_exits_with_mains_status_after_freezing_what_is_left():
+    # a fresh process, as the console script runs: the exit status is main's, the
+    # objects left are frozen (the last collection skips them), numpy was told to keep
+    # to small pages unless the environment says otherwise
+    code = ("import gc, os, sys\n"
+            "from rapidfix import cli\n"
+            "cli.main = lambda: 3\n"
+            "try:\n"
+            "    cli.console_main()\n"
+            "except SystemExit as done:\n"
+            "    print(done.code, gc.get_freeze_count() > 0,\n"
+            "          os.environ['NUMPY_MADVISE_HUGEPAGE'])\n")
+    env = {k: v for k, v in os.environ.items() if k != "NUMPY_MADVISE_HUGEPAGE"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, check=True)
+    assert done.stdout.split() == ["3", "True", "0"]
+    env["NUMPY_MADVISE_HUGEPAGE"] = "1"  # the user's choice stands
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, check=True)
+    assert done.stdout.split() == ["3", "True", "1"]
+
+
+def test_the_installed_console_script_runs_console_main():
+    # pyproject's entry point names console_main, and `python -m rapidfix.cli` runs it
+    text = (Path(__file__).parents[2] / "pyproject.toml").read_text(encoding="utf-8")
+    assert 'rapidfix = "rapidfix.cli:console_main"' in text
+    done = subprocess.run([sys.executable, "-m", "rapidfix.cli", "--version"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.startswith("rapidfix ")
