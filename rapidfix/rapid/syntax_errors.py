@@ -79,6 +79,8 @@ PLACEHOLDERS = frozenset({"<ALT>", "<ARG>", "<CSE>", "<DDN>", "<DIM>", "<EIT>", 
 def placeholders_in(text: str) -> list[tuple[int, str]]:
     """(offset, text) of every placeholder outside strings and comments, in order.
     In a program that parsed each is one RAPID takes (rapid.lark)."""
+    if "<" not in text:  # most programs: no need to step over every comment and string
+        return []
     return [(m.start(), m.group(0)) for m in _PLACEHOLDER_SCAN.finditer(text)
             if m.group(0).startswith("<") and m.group(0) in PLACEHOLDERS]
 

@@ -149,6 +149,37 @@ def test_motion_arguments_spans_and_optional():
     assert m.optional["t"].value == 2.0
 
 
+def test_every_operand_text_is_its_source_text_and_an_inline_target_keeps_no_copy():
+    # the text of each operand against the source slice of its expression, on moves the
+    # fast path reads (shared tails, inline targets, Offs, nested calls) and on a move
+    # with a comment inside, which the plain grammar reads
+    inline = f"[[1,2,3],[1,0,0,0],[0,0,0,0],{UNUSED}]"
+    text = module(
+        f"CONST robtarget p10 := {inline};",
+        f"  MoveL {inline}, v100, z10, tool0;\n"
+        f"  MoveL [[4,5,6],[1,0,0,0],[0,0,0,0],{UNUSED}], v100, z10, tool0;\n"
+        "  MoveL Offs(p10, 0, 0, 5), v200, fine, tool0 \\WObj:=wobj0;\n"
+        "  MoveJ Offs(RelTool(p10,0,0,1),0,0,2), v100, z10, tool0;\n"
+        "  MoveL p10, ! a comment\n    v100, z1 ,  tool0;\n"
+        "  MoveL \\Conc, p10, v100 \\T:=2, z10, tool0;",
+    )
+    program = parse_program(text, "cell.mod")
+    assert len(program.motions) == 6
+    seen = 0
+    for motion in program.motions:
+        for operand in [*motion.arguments.values(), *motion.optional.values()]:
+            value = operand.argument.value
+            expected = "" if value is None else text[value.start:value.end]
+            assert operand.text == expected, (motion.name, expected)
+            seen += 1
+    assert seen == 27
+    first = program.motions[0].target
+    assert first.form == "inline" and first.given_text is None
+    assert first.text == inline
+    assert program.motions[2].target.text == "Offs(p10, 0, 0, 5)"
+    assert program.motions[3].target.text == "Offs(RelTool(p10,0,0,1),0,0,2)"
+
+
 @pytest.mark.parametrize("instruction,args,targets,kind", [
     ("MoveJ", "p1, v100, z10, tool0", ["p1"], "robtarget"),
     ("MoveC", "p1, p2, v100, z10, tool0", ["p1", "p2"], "robtarget"),
