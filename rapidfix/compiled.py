@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -36,9 +37,42 @@ def load_kernel(module: str) -> ModuleType | None:
     if importlib.util.find_spec("numba") is None:
         return None
     try:
-        return importlib.import_module(module)
+        kernel = importlib.import_module(module)
     except ImportError:
         return None
+    _numba_ready()
+    return kernel
+
+
+_SCIPY_BLAS = "scipy.linalg.cython_blas"
+
+
+@cache
+def _numba_ready() -> None:
+    """Load numba's implementations (its target context's `refresh`, which its first
+    compile or cache load does anyway) with scipy's BLAS wrappers held back.
+
+    Among them numba.np.arraymath checks once that `scipy.linalg.cython_blas` imports,
+    and importing scipy.linalg costs 0.25 s of CPU: half of numba's first use in a
+    process, paid by every rewrite large enough for the kernels. None of rapidfix's
+    kernels calls BLAS. All that check decides is whether numba's np.convolve and
+    np.correlate take their inner products from BLAS or from a loop; every other BLAS
+    function numba compiles imports the wrappers itself when it is compiled (normally:
+    they are held back only here). When scipy.linalg is imported already, nothing is
+    held back; when anything here fails, numba loads as it would have.
+    """
+    if _SCIPY_BLAS in sys.modules or "numba.np.arraymath" in sys.modules:
+        return
+    sys.modules[_SCIPY_BLAS] = None  # type: ignore[assignment]  # import raises ImportError
+    try:
+        from numba.core.registry import cpu_target
+
+        cpu_target.target_context.refresh()
+    except Exception:  # numba's own first use loads it then
+        pass
+    finally:
+        if _SCIPY_BLAS in sys.modules and sys.modules[_SCIPY_BLAS] is None:
+            del sys.modules[_SCIPY_BLAS]
 
 
 class Switch:

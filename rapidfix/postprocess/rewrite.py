@@ -58,7 +58,7 @@ from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
 EMIT_CHOICES = ("jointtargets", "robtargets")
 #: programs of this much kernel work or more are solved with the compiled kernels (numba):
 #: their moves, an arc counting four (see `kernel_work`)
-COMPILED_FROM_WORK = 40_000
+COMPILED_FROM_WORK = 20_000
 
 
 @dataclass(frozen=True)
@@ -351,8 +351,8 @@ def kernel_work(program: Program) -> int:
 @contextmanager
 def _kernels_for(work: int) -> Iterator[None]:
     """The compiled kernels (IK, forward kinematics, RBF sums) for a program of at least
-    COMPILED_FROM_WORK of `kernel_work`, numpy's below: their one-time load (numba, the
-    scipy.linalg it imports, its registries: 0.4-0.7 s of CPU, 110 MB) costs more than
+    COMPILED_FROM_WORK of `kernel_work`, numpy's below: their one-time load (numba and
+    its registries, `compiled._numba_ready`: about 0.3 s of CPU, 100 MB) costs more than
     they save, about 10 µs a move, on a smaller program. Chosen by the program alone, so
     the same program gives the same bytes whatever a process (a batch worker) rewrote
     before."""
