@@ -72,13 +72,16 @@ _TIMED = {
 
 
 def _child(timed_set: str, argv: list[str]) -> None:
-    """Run `rapidfix ARGV` in this process with the steps of `_TIMED[timed_set]` timed;
-    print their CPU seconds as JSON on stderr."""
+    """Run `rapidfix ARGV` in this process with the steps of `_TIMED[timed_set]` timed,
+    as the tree's console script runs it; print their CPU seconds as JSON on stderr."""
     import importlib
 
-    from process_phases import timed  # this script's folder: sys.path[0]
+    from rapidfix import cli  # light: imports neither numpy nor a command
 
-    from rapidfix.cli import main
+    console = getattr(cli, "console_main", None)
+    if console is not None:  # what it sets before numpy is imported (the timers import it)
+        os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+    from process_phases import timed  # this script's folder: sys.path[0]
 
     spent: dict[str, float] = {}
     for module_name, owner, name in _TIMED[timed_set]:
@@ -87,8 +90,9 @@ def _child(timed_set: str, argv: list[str]) -> None:
             target = getattr(target, owner, None)
         if target is not None and hasattr(target, name):
             setattr(target, name, timed(spent, name, getattr(target, name)))
+    sys.argv = ["rapidfix", *argv]
     try:
-        main(argv)
+        console() if console is not None else cli.main(argv)
     except SystemExit:
         pass
     print("TIMED " + json.dumps(spent), file=sys.stderr)
@@ -133,6 +137,7 @@ def main() -> None:
     from program_shapes import shape_program
 
     work = Path(tempfile.mkdtemp(prefix="before_after_"))
+    model = str(options.model.resolve())  # the children run in the temporary folder
     trees = {"before": options.base.resolve(), "after": TREE}
     steps = [None, *(name for _, _, name in _TIMED[options.cases])]
     print(f"{'case':26s} " + " ".join(f"{step or 'whole process':>22s}" for step in steps)
@@ -152,7 +157,7 @@ def main() -> None:
             for tree, path in trees.items():
                 out = work / f"out_{tree}.mod"
                 args = (["check", str(source)] if emit == "check" else
-                        ["rewrite", str(source), "-o", str(out), "--model", str(options.model),
+                        ["rewrite", str(source), "-o", str(out), "--model", model,
                          "--force", "--emit", emit])
                 runs[tree].append(_run(path, options.cases, args))
                 written[tree] = b"" if emit == "check" else out.read_bytes()
