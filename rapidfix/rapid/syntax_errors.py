@@ -38,7 +38,7 @@ _GROUPS: tuple[tuple[str, frozenset[str], int], ...] = (
 )
 
 # Strings and comments are skipped so that '<SMT>' inside them is left alone.
-_PLACEHOLDER_SCAN = re.compile(r'"(?:[^"\r\n]|"")*"|![^\n]*|<[A-Z]{2,8}>')
+_PLACEHOLDER_SCAN = re.compile(r'"[^"\r\n]*(?:""[^"\r\n]*)*"|![^\n]*|<[A-Z]{2,8}>')
 
 
 def describe_terminal(name: str) -> str | None:
