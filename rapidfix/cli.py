@@ -183,6 +183,7 @@ def _error_line(err: Exception) -> tuple[int, str]:
     return EXIT_FAILURE, (f"rapidfix: internal error: {type(err).__name__}: {err} "
                           "(run with --debug for the traceback, and please report it)")
 
+
 def console_main() -> None:
     """The console script (and `python -m rapidfix.cli`): `main`, then exit with its status.
 
