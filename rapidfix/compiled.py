@@ -60,8 +60,8 @@ def _numba_ready() -> None:
     function numba compiles imports the wrappers itself when it is compiled (normally:
     they are held back only here). When scipy.linalg is imported already, nothing is
     held back; when anything here fails, numba loads as it would have. (Another thread
-    importing scipy.linalg during this one call, 0.1 s, would see it refused: rapidfix
-    starts none.)
+    importing scipy.linalg during this one call, 0.1 s, would see it refused; rapidfix's
+    own threads, a batch worker's watcher and progress bars, import nothing.)
     """
     if _SCIPY_BLAS in sys.modules or "numba.np.arraymath" in sys.modules:
         return
