@@ -8,6 +8,7 @@ kinematics is analytic for the nominal model and seeded Newton for an actual one
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -170,14 +171,8 @@ class RobotModel:
         T = np.asarray(T, dtype=float)
         if ik_options or T.ndim != 3 or T.shape[0] <= chunks.IK_CONF:
             return select_by_conf(self, self.ik(T, **ik_options), conf)  # type: ignore[arg-type]
-        # in chunks: the (poses × 8 branches) temporaries then stay small and are reused
         conf = np.broadcast_to(np.asarray(conf, dtype=int), (T.shape[0], 4))
-        q = np.empty((T.shape[0], 6))
-        status = np.empty(T.shape[0], dtype=np.int8)
-        for start in range(0, T.shape[0], chunks.IK_CONF):
-            rows = slice(start, start + chunks.IK_CONF)
-            q[rows], status[rows] = select_by_conf(self, self.ik(T[rows]), conf[rows])
-        return q, status
+        return _in_chunks(T, conf, lambda t, c: select_by_conf(self, self.ik(t), c))
 
     def ik_nearest(
         self, T: np.ndarray, q_prev: np.ndarray, **ik_options: object
@@ -187,16 +182,23 @@ class RobotModel:
         if ik_options or T.ndim != 3 or T.shape[0] <= chunks.IK_CONF:
             sols = self.ik(T, q_prev=q_prev, **ik_options)  # type: ignore[arg-type]
             return select_nearest(sols, q_prev)
-        # in chunks, as ik_conf: the (poses × 8 branches × 6 axes) temporaries stay small
         prev = np.broadcast_to(np.asarray(q_prev, dtype=float), (T.shape[0], 6))
-        q = np.empty((T.shape[0], 6))
-        status = np.empty(T.shape[0], dtype=np.int8)
-        for start in range(0, T.shape[0], chunks.IK_CONF):
-            rows = slice(start, start + chunks.IK_CONF)
-            q[rows], status[rows] = select_nearest(self.ik(T[rows], q_prev=prev[rows]),
-                                                   prev[rows])
-        return q, status
+        return _in_chunks(T, prev, lambda t, p: select_nearest(self.ik(t, q_prev=p), p))
 
     def confdata(self, q: np.ndarray) -> np.ndarray:
         """ABB confdata [cf1, cf4, cf6, cfx] (N, 4) int of joints q (N, 6) rad."""
         return confdata_of(self, q)
+
+
+def _in_chunks(T: np.ndarray, per_row: np.ndarray,
+               solve: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(q (N, 6), status (N,)) of `solve(T[rows], per_row[rows])` over chunks of
+    chunks.IK_CONF poses: the IK's (poses × 8 branches × 6 axes) temporaries then stay
+    small and are reused."""
+    q = np.empty((T.shape[0], 6))
+    status = np.empty(T.shape[0], dtype=np.int8)
+    for start in range(0, T.shape[0], chunks.IK_CONF):
+        rows = slice(start, start + chunks.IK_CONF)
+        q[rows], status[rows] = solve(T[rows], per_row[rows])
+    return q, status
