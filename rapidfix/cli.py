@@ -184,19 +184,25 @@ def _error_line(err: Exception) -> tuple[int, str]:
                           "(run with --debug for the traceback, and please report it)")
 
 
-def console_main() -> None:
-    """The console script (and `python -m rapidfix.cli`): `main`, then exit with its status.
-
-    numpy is asked not to back its large arrays with transparent huge pages (NumPy's
-    own switch NUMPY_MADVISE_HUGEPAGE, unless the environment sets it): a rewrite's
-    arrays are made once and read a few times, and the kernel zeroing 2 MB pages cost
-    more system time than the TLB misses they save (0.35 s of a 200,000-line inline
-    rewrite on a 2-core VM). What the run left (after a large rewrite: numba's and
-    LLVM's objects) is frozen before the exit, so the interpreter's last full
-    collection does not walk it all once more (0.15 s). Every file is written and
-    closed by then; atexit handlers and finalizers still run.
-    """
+def prepare_process() -> None:
+    """What the console script sets before anything imports numpy: no transparent huge
+    pages for numpy's large arrays (NumPy's own switch NUMPY_MADVISE_HUGEPAGE, unless
+    the environment sets it). A rewrite's arrays are made once and read a few times,
+    and the kernel zeroing 2 MB pages cost more system time than the TLB misses they
+    save (0.35 s of a 200,000-line inline rewrite on a 2-core VM)."""
     os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+
+
+def console_main() -> None:
+    """The console script (and `python -m rapidfix.cli`): `prepare_process`, `main`, then
+    exit with its status.
+
+    What the run left (after a large rewrite: numba's and LLVM's objects) is frozen
+    before the exit, so the interpreter's last full collection does not walk it all
+    once more (0.15 s). Every file is written and closed by then; atexit handlers and
+    finalizers still run.
+    """
+    prepare_process()
     status = main()
     gc.freeze()
     sys.exit(status)

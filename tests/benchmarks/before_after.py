@@ -79,8 +79,8 @@ def _child(timed_set: str, argv: list[str]) -> None:
     from rapidfix import cli  # light: imports neither numpy nor a command
 
     console = getattr(cli, "console_main", None)
-    if console is not None:  # what it sets before numpy is imported (the timers import it)
-        os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+    # what it sets before numpy is imported, which the timers below import
+    getattr(cli, "prepare_process", lambda: None)()
     from process_phases import timed  # this script's folder: sys.path[0]
 
     spent: dict[str, float] = {}

@@ -14,7 +14,6 @@ waits for it (test_shapes_speed.py prints them per shape). The timers cost micro
 from __future__ import annotations
 
 import json
-import os
 import resource
 import sys
 import time
@@ -86,8 +85,7 @@ def _peak_kb() -> int:
 def main(argv: list[str]) -> int:
     import rapidfix.cli as cli  # light: imports neither numpy nor a command
 
-    if hasattr(cli, "console_main"):  # what the console script sets before numpy's import
-        os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+    getattr(cli, "prepare_process", lambda: None)()  # as the console script, if the tree has it
     _time_kernel_imports()
     time_steps(_spent, STEPS)
     status = cli.main(argv)
