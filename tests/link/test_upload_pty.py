@@ -133,14 +133,18 @@ def test_any_line_gives_the_exact_file_or_a_link_error(
     ):
         try:
             send(tmp_path, data, sim, settings=quick)
-            completed = True
-        except LinkError:
-            completed = False
+            completed, message = True, ""
+        except LinkError as err:
+            completed, message = False, str(err)
     names = {p.name for p in folder.iterdir()}
     if completed:
         assert (folder / NAME).read_bytes() == data
-    else:
-        assert NAME not in names
+    elif NAME in names:
+        # every DONE lost after the receiver put the file in place: the outcome is in
+        # doubt, and the uploader says so (on a loaded machine, seed 265, drop 0.3)
+        assert "no answer from the receiver after sending all" in message
+        assert "whether the file arrived" in message
+        assert (folder / NAME).read_bytes() == data
     assert names <= {NAME, temp_name(NAME)}
     assert watch.bad == []
     assert sim.error is None
