@@ -156,13 +156,17 @@ class Evaluator:
         return value, kind
 
     # ------------------------------------------------------------ functions
-    def _call(self, expr: s.Call) -> TypedValue:
+    def _call(self, expr: s.Call, args: list[s.Argument] | None = None) -> TypedValue:
+        """The value of a function call; `args` its arguments where they are at hand
+        (their values are what counts, not where they stand), else `expr.args`."""
         handler = _handler(expr)
-        required = [self.value(a.value) for a in expr.args
+        if args is None:
+            args = expr.args
+        required = [self.value(a.value) for a in args
                     if a.kind == "required" and a.value is not None]
         optional = {a.key: (self.value(a.value) if a.value is not None else True)
-                    for a in expr.args if a.kind == "optional"}
-        if any(a.kind == "conditional" for a in expr.args):
+                    for a in args if a.kind == "optional"}
+        if any(a.kind == "conditional" for a in args):
             raise NotConstant("conditional argument is decided at run time")
         return _apply(expr, handler, required, optional)
 
@@ -170,9 +174,11 @@ class Evaluator:
         """_call of a function call whose further arguments are a shared tail: a tail of
         constants is evaluated once (_constant_tail), the first argument every time."""
         head = expr.head
-        constants = None if head is None or head.value is None else _constant_tail(expr.tail)
-        if constants is None:
+        if head is None or head.value is None:
             return self._call(expr)
+        constants = _constant_tail(expr.tail)
+        if constants is None:  # the tail's arguments, read by _constant_tail at offset 0
+            return self._call(expr, [head, *_TAIL_VALUES[id(expr.tail)][2]])
         handler = _handler(expr)
         first = self.value(head.value)  # the first required argument, as _call takes it
         required, optional, failure = constants
@@ -228,9 +234,10 @@ def _no_names(name: str) -> TypedValue:  # pragma: no cover - only constants are
 
 
 _CONSTANT_NODES = (s.Number, s.NumericAggregate, s.String, s.Bool)
-# A shared argument tail (see s.LazyFunctionCall) -> (the tail, its values or None); the
-# tail is kept with its values so that its id is not reused while the entry lives.
-_TAIL_VALUES: dict[int, tuple[object, tuple | None]] = {}
+# A shared argument tail (see s.LazyFunctionCall) -> (the tail, its values or None, its
+# arguments at offset 0 where they are not all literals: _lazy_call evaluates them, not
+# a second copy); the tail is kept so that its id is not reused while the entry lives.
+_TAIL_VALUES: dict[int, tuple[object, tuple | None, list[s.Argument]]] = {}
 
 
 def _is_constant(expr: s.Expr | None) -> bool:
@@ -263,7 +270,7 @@ def _constant_tail(tail: s.ArgumentTail) -> tuple | None:
             result = ((), {}, err.reason)
     if len(_TAIL_VALUES) >= 4096:
         _TAIL_VALUES.clear()
-    _TAIL_VALUES[id(tail)] = (tail, result)
+    _TAIL_VALUES[id(tail)] = (tail, result, [] if result is not None else arguments)
     return result
 
 

@@ -26,7 +26,6 @@ terminals short (their compile time is part of every command's start-up).
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import re
 import sys
@@ -207,6 +206,9 @@ _NONE: frozenset[str] = frozenset()
 # LE, GE and NE before LT, GT and EQ: the lexer takes the longest
 _RELATION = re.compile("<>|<=|>=|[<>=]")
 _SUM = frozenset("+-")
+# What may follow a condition's last operand: where `_Reader.condition` finds one of
+# these after its first, that operand is the whole condition ('' the end of the text)
+_AFTER_OPERAND = frozenset([",", ")", "]", "}", ";", ":", "\\", ""])
 _PRODUCT = frozenset("*/")
 
 
@@ -249,7 +251,11 @@ class _Reader:
     def _chain(self, operand: Callable[[], s.Expr], ops: frozenset[str],
                words: tuple[str, ...]) -> s.Expr:
         """Operands joined by left-associative operators of one precedence level."""
-        left = operand()
+        return self._chain_from(operand(), operand, ops, words)
+
+    def _chain_from(self, left: s.Expr, operand: Callable[[], s.Expr], ops: frozenset[str],
+                    words: tuple[str, ...]) -> s.Expr:
+        """`_chain` whose first operand `left` has been read."""
         while (op := self._operator(ops, words)) is not None:
             self.pos += op[1]
             right = operand()
@@ -257,27 +263,47 @@ class _Reader:
         return left
 
     def condition(self) -> s.Expr:
-        """rapid.lark's `expr`: OR / XOR of AND of NOT of a relation of sums."""
-        return self._chain(self._and, _NONE, ("OR", "XOR"))
+        """rapid.lark's `expr`: OR / XOR of AND of NOT of a relation of sums.
+
+        Most values are one operand (an aggregate's item, an index, an argument): it is
+        read by `factor`, and where no operator follows, it is the whole condition, as
+        every level below would return it unchanged; else the levels go on from it."""
+        if self._skip() in "nN" and self._at_not():
+            return self._chain(self._and, _NONE, ("OR", "XOR"))
+        left = self.factor()
+        if self._skip() in _AFTER_OPERAND:
+            return left
+        left = self._chain_from(left, self.factor, _PRODUCT, ("DIV", "MOD"))
+        left = self._chain_from(left, self.term, _SUM, ())
+        left = self._relation_from(left)
+        left = self._chain_from(left, self._not, _NONE, ("AND",))
+        return self._chain_from(left, self._and, _NONE, ("OR", "XOR"))
 
     def _and(self) -> s.Expr:
         return self._chain(self._not, _NONE, ("AND",))
 
+    def _at_not(self) -> bool:
+        """Whether the next word is NOT (the next character has been skipped to)."""
+        word = _WORD.match(self.text, self.pos)
+        return word is not None and word.end() - word.start() == 3 and (
+            word.group().upper() == "NOT")
+
     def _not(self) -> s.Expr:
         # NOT is a keyword only where the grammar's `not_expr` may start; elsewhere the
         # contextual lexer reads it as a name, which atom refuses
-        if self._skip() in "nN":
-            word = _WORD.match(self.text, self.pos)
-            if word is not None and word.group().upper() == "NOT":
-                at = self.base + self.pos
-                self.pos = word.end()
-                operand = self._not()
-                return s.Unary(at, operand.end, "NOT", operand)
+        if self._skip() in "nN" and self._at_not():
+            at = self.base + self.pos
+            self.pos += 3
+            operand = self._not()
+            return s.Unary(at, operand.end, "NOT", operand)
         return self._relation()
 
     def _relation(self) -> s.Expr:
         """A sum, or two compared (the grammar does not chain relations)."""
-        left = self.expression()
+        return self._relation_from(self.expression())
+
+    def _relation_from(self, left: s.Expr) -> s.Expr:
+        """`_relation` whose sum `left` has been read."""
         self._skip()
         m = _RELATION.match(self.text, self.pos)
         if m is None:
@@ -512,30 +538,6 @@ def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
     return node
 
 
-#: the nodes `moved` copies (fastpath._moved the others)
-MOVED_BY_FAST_EXPRESSIONS = (s.NameRef, s.Number, s.Binary, s.Component, s.Paren)
-
-
-def moved(node: s.Expr, shift: int, move: Callable[[s.Expr, int], s.Expr]) -> s.Expr:
-    """A copy of a node of MOVED_BY_FAST_EXPRESSIONS moved by `shift`, its children
-    moved by `move` (fastpath._moved): a shared tail's operands are copied for every
-    call that asks for its arguments."""
-    kind = type(node)
-    if kind is s.NameRef:
-        return s.NameRef(node.start + shift, node.end + shift, node.name)
-    if kind is s.Number:
-        return s.Number(node.start + shift, node.end + shift, node.value, node.text)
-    if isinstance(node, s.Binary):
-        return s.Binary(node.start + shift, node.end + shift, node.op,
-                        move(node.left, shift), move(node.right, shift))
-    if isinstance(node, s.Component):
-        return s.Component(node.start + shift, node.end + shift, move(node.base, shift),
-                           node.name)
-    if isinstance(node, s.Paren):
-        return s.Paren(node.start + shift, node.end + shift, move(node.inner, shift))
-    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
-
-
-__all__ = ["MOVED_BY_FAST_EXPRESSIONS", "NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "STRING",
-           "VALUE_TEXT", "WS", "NotRead", "condition_pattern", "expression_patterns", "moved",
+__all__ = ["NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "STRING",
+           "VALUE_TEXT", "WS", "NotRead", "condition_pattern", "expression_patterns",
            "read_expression", "read_list"]

@@ -54,6 +54,7 @@ import dataclasses
 import functools
 import re
 import sys
+from collections.abc import Callable
 from typing import Any
 
 from lark import Lark, Token, Tree, v_args
@@ -64,7 +65,6 @@ from rapidfix.rapid import syntax as s
 from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.fast_expressions import (
     LATIN1_LETTERS,
-    MOVED_BY_FAST_EXPRESSIONS,
     NAME,
     NAME_START,
     PLAIN_VALUE,
@@ -72,7 +72,6 @@ from rapidfix.rapid.fast_expressions import (
     NotRead,
     condition_pattern,
     expression_patterns,
-    moved,
     read_expression,
     read_list,
 )
@@ -492,7 +491,8 @@ def _inline_target(text: str, start: int) -> s.NumericAggregate | None:
 def _read(text: str, start: int) -> s.Expr:
     """read_expression(text, start) of a condition (NotFast where it gives up). A program
     repeats its expressions (`nCount + 1`, `nCount < 3`): each text is read once, and
-    read again as the first's nodes moved to where it stands. A long text (a table of
+    read again as the first's nodes moved to where it stands (the first use gets the
+    nodes as read). A long text (a table of
     records, `[[0,11,1,"s7j46w0-0",...],...]`) hardly ever recurs (2 of 125 in the real
     corpus): it is read where it stands and not kept, which spares copying its nodes."""
     if len(text) > READ_KEPT_CHARS:
@@ -507,8 +507,10 @@ def _read(text: str, start: int) -> s.Expr:
         node = read_expression(text, start, condition=True)
     except NotRead:
         raise NotFast(text) from None
+    # kept as read: syntax nodes are never changed, and a later use of the text gets
+    # its own copy (moved), so this tree stays the only one that holds these nodes
     _READ.keep(text, node)
-    return _moved(node, 0)  # the kept nodes are nobody's
+    return node
 
 
 #: the longest expression text _read keeps (see there)
@@ -552,28 +554,42 @@ def _deep_aggregate(text: str, start: int, rests: Memo) -> s.Aggregate:
 
 def _moved(node: Any, shift: int) -> Any:
     """A copy of an expression or argument node with its offsets moved by `shift`."""
-    if isinstance(node, s.Argument):
-        return s.Argument(node.start + shift, node.end + shift, node.kind, node.name,
-                          None if node.value is None else _moved(node.value, shift))
-    if isinstance(node, s.Unary):
-        return s.Unary(node.start + shift, node.end + shift, node.op,
-                       _moved(node.operand, shift))
-    if isinstance(node, s.LazyFunctionCall):
-        return s.LazyFunctionCall(node.start + shift, node.end + shift, node.name,
-                                  None if node.head is None else _moved(node.head, shift),
-                                  node.tail, node.shift + shift)
-    if isinstance(node, s.Aggregate):
-        return s.Aggregate(node.start + shift, node.end + shift,
-                           [_moved(item, shift) for item in node.items])
-    if isinstance(node, s.Index):
-        return s.Index(node.start + shift, node.end + shift, _moved(node.base, shift),
-                       [_moved(index, shift) for index in node.indices])
-    if isinstance(node, s.Call):
-        return s.Call(node.start + shift, node.end + shift, node.name,
-                      [_moved(a, shift) for a in node.args])
-    if isinstance(node, MOVED_BY_FAST_EXPRESSIONS):
-        return moved(node, shift, _moved)
-    return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
+    mover = _MOVERS.get(type(node))
+    if mover is None:  # a node the fast path does not make: copied field by field
+        return dataclasses.replace(node, start=node.start + shift, end=node.end + shift)
+    return mover(node, shift)
+
+
+def _moved_or_none(node: Any, shift: int) -> Any:
+    return None if node is None else _moved(node, shift)
+
+
+# How each node type is copied (by its exact type: a dictionary look-up, where a chain of
+# isinstance tests cost more than the copy of a leaf; a shared tail's operands and a
+# repeated expression's nodes are copied for every use).
+_MOVERS: dict[type, Callable[[Any, int], Any]] = {
+    s.NameRef: lambda n, d: s.NameRef(n.start + d, n.end + d, n.name),
+    s.Number: lambda n, d: s.Number(n.start + d, n.end + d, n.value, n.text),
+    s.String: lambda n, d: s.String(n.start + d, n.end + d, n.value),
+    s.Bool: lambda n, d: s.Bool(n.start + d, n.end + d, n.value),
+    s.NumericAggregate: lambda n, d: s.NumericAggregate(n.start + d, n.end + d, n.value),
+    s.Binary: lambda n, d: s.Binary(n.start + d, n.end + d, n.op, _moved(n.left, d),
+                                    _moved(n.right, d)),
+    s.Unary: lambda n, d: s.Unary(n.start + d, n.end + d, n.op, _moved(n.operand, d)),
+    s.Paren: lambda n, d: s.Paren(n.start + d, n.end + d, _moved(n.inner, d)),
+    s.Component: lambda n, d: s.Component(n.start + d, n.end + d, _moved(n.base, d),
+                                          n.name),
+    s.Index: lambda n, d: s.Index(n.start + d, n.end + d, _moved(n.base, d),
+                                  [_moved(index, d) for index in n.indices]),
+    s.Aggregate: lambda n, d: s.Aggregate(n.start + d, n.end + d,
+                                          [_moved(item, d) for item in n.items]),
+    s.Call: lambda n, d: s.Call(n.start + d, n.end + d, n.name,
+                                [_moved(a, d) for a in n.args]),
+    s.LazyFunctionCall: lambda n, d: s.LazyFunctionCall(
+        n.start + d, n.end + d, n.name, _moved_or_none(n.head, d), n.tail, n.shift + d),
+    s.Argument: lambda n, d: s.Argument(n.start + d, n.end + d, n.kind, n.name,
+                                        _moved_or_none(n.value, d)),
+}
 
 
 def _nested(start: int, end: int, template: s.Expr) -> s.Expr:

@@ -8,6 +8,7 @@ precedence and associativity come out in the node structure).
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 from pathlib import Path
@@ -136,12 +137,44 @@ def test_moves_with_expressions_build_the_plain_model():
         "MoveL Offs(p1,wPlate.uframe.trans.x/2,0,0),v100,z1,tMill\\WObj:=wPlate;",
         "MoveL Offs(p2,nStep,0,0),v100,z1,tMill\\WObj:=wPlate;",
         "MoveL Offs(RelTool(p3,0,0,-nStep),nStep*2,0,-1),v100,z1,tMill\\WObj:=wPlate;",
+        # tails that name data, one distinct text per move (records of other data)
+        "MoveL Offs(p0,tMill.tframe.trans.x*0,p0.trans.x*0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p1,tMill.tframe.trans.x*0,p1.trans.x*0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p2,tMill.tframe.trans.x*0,p1.trans.x*0,0),v100,z1,tMill\\WObj:=wPlate;",
+        "MoveL Offs(p3,p1.trans.nope,0,0),v100,z1,tMill\\WObj:=wPlate;",
     ]
     text = "\n".join(["MODULE M", *lines, "  PROC main()", *("    " + m for m in moves),
                       "  ENDPROC", "ENDMODULE", ""])
     program = assert_same_model(text)
     assert len(program.motions) == len(moves)
-    assert sum(m.target.static for m in program.motions) >= 7
+    assert sum(m.target.static for m in program.motions) >= 10
+    assert not program.motions[-1].target.static  # p1 has no component `nope`
+
+
+def test_a_repeated_expression_gets_nodes_of_its_own():
+    """A text read again is the first reading's nodes moved: every tree holds nodes of
+    its own, at its own offsets (the plain grammar's)."""
+    text = routine(*["x := nStep * 2 + rec.a{1};"] * 3,
+                   *["Foo [nStep+1, -2*k], nStep * 2 + rec.a{1};"] * 2)
+    assert_parses_as_plain(text)
+    tree = fast_parser().parse(text)
+    seen: dict[int, object] = {}
+
+    def walk(node: object) -> None:
+        if isinstance(node, s.Node):
+            assert id(node) not in seen, f"{type(node).__name__} shared between trees"
+            seen[id(node)] = node
+        values = [getattr(node, f.name) for f in dataclasses.fields(node)
+                  if f.name != "args"] if dataclasses.is_dataclass(node) else []
+        if isinstance(node, s.ProcedureCall | s.Call):
+            values.append(node.args)
+        for value in values:
+            for item in value if isinstance(value, list | tuple) else [value]:
+                if dataclasses.is_dataclass(item) or isinstance(item, s.Node):
+                    walk(item)
+
+    walk(tree)
+    assert sum(isinstance(n, s.Binary) for n in seen.values()) >= 12
 
 
 @pytest.mark.parametrize("text", ["a AND b", "a <> b", "NOT a", "a+NOT b", "f(x:=1)",
