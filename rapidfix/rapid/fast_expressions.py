@@ -196,6 +196,8 @@ _NUMBER = re.compile(NUMBER)
 _STRING = re.compile(STRING)
 _WORD = re.compile(NAME)
 _AGGREGATE = re.compile(NUMERIC_AGGREGATE)
+#: where the grammar's NUMERIC_AGGREGATE matches at the start of a text (or None)
+NUMERIC_AGGREGATE_MATCH = _AGGREGATE.match
 # An aggregate's item that is a literal alone: (sign, number), string or TRUE / FALSE,
 # then whitespace and the ',' or ']' after it (_Reader._item)
 _LITERAL_ITEM = re.compile(
@@ -538,6 +540,17 @@ def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
     return node
 
 
-__all__ = ["NUMBER", "NUMERIC_AGGREGATE", "PLAIN_VALUE", "STRING",
-           "VALUE_TEXT", "WS", "NotRead", "condition_pattern", "expression_patterns",
-           "read_expression", "read_list"]
+__all__ = [
+    "NUMBER",
+    "NUMERIC_AGGREGATE",
+    "NUMERIC_AGGREGATE_MATCH",
+    "PLAIN_VALUE",
+    "STRING",
+    "VALUE_TEXT",
+    "WS",
+    "NotRead",
+    "condition_pattern",
+    "expression_patterns",
+    "read_expression",
+    "read_list",
+]

@@ -495,6 +495,10 @@ def _read(text: str, start: int) -> s.Expr:
     nodes as read). A long text (a table of
     records, `[[0,11,1,"s7j46w0-0",...],...]`) hardly ever recurs (2 of 125 in the real
     corpus): it is read where it stands and not kept, which spares copying its nodes."""
+    if text.startswith("[["):
+        grouped = _grouped_read(text, start)
+        if grouped is not None:
+            return grouped
     if len(text) > READ_KEPT_CHARS:
         try:
             return read_expression(text, start, condition=True)
@@ -515,6 +519,34 @@ def _read(text: str, start: int) -> s.Expr:
 
 #: the longest expression text _read keeps (see there)
 READ_KEPT_CHARS = 256
+
+
+def _grouped_read(text: str, start: int) -> s.Aggregate | None:
+    """_read of an aggregate `[[g...],b,...]` whose first item is a flat group (no
+    bracket nor string inside): the group read every time, the items after it once per
+    distinct text and moved to where they stand, as `grouped_value` does for numbers. A
+    robtarget whose position holds arithmetic (`[[x0+nStep*2,y0,z0],[1,0,0,0],...]`)
+    shares its orientation, confdata and axes with its neighbours. None for any other
+    text (then read in full)."""
+    cut = text.find("]")
+    if (cut < 0 or not text.startswith(",", cut + 1) or "[" in text[2:cut]
+            or '"' in text[:cut] or len(text) - cut > READ_KEPT_CHARS
+            or fast_expressions.NUMERIC_AGGREGATE_MATCH(text) is not None):
+        return None  # (an aggregate of numbers is the grammar's NUMERIC_AGGREGATE)
+    rest = text[cut + 1:]
+    items = _AGGREGATE_RESTS.get(rest)
+    try:
+        first = read_expression(text[1:cut + 1], start + 1, condition=True)
+        if items is None:  # read after a stand-in first item (a name), at offset 0
+            items = read_expression("[x" + rest, 0, condition=True)
+            if type(items) is not s.Aggregate:
+                return None
+            _AGGREGATE_RESTS.keep(rest, items)
+    except NotRead:
+        return None  # read in full (which decides)
+    shift = start + cut + 1 - 2
+    return s.Aggregate(start, start + len(text),
+                       [first, *[_moved(item, shift) for item in items.items[1:]]])
 
 
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.
@@ -710,6 +742,9 @@ _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 _READ: Memo = Memo(TAIL_LIMIT)
 # The argument values of tails, read once per distinct text (see _value_entry).
 _ENTRIES: Memo = Memo(4 * TAIL_LIMIT)
+# What follows an aggregate's first group -> the aggregate read with a stand-in first
+# item (see _grouped_read).
+_AGGREGATE_RESTS: Memo = Memo(TAIL_LIMIT)
 
 
 def split_calls(text: str, base: int) -> list[s.Statement]:
@@ -905,7 +940,8 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _AGGREGATE_RESTS, _RESTS,
+                 _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

@@ -194,6 +194,17 @@ ARITHMETIC_IN_NUMBERS = [
            "CONST robtarget q{2}:=[[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
            "[[1+1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];",
            "CONST num n{3}:=[1-1,2,3];"),
+    # a position with arithmetic, what follows it read once per distinct text
+    # (fastpath._grouped_read): repeated, after other groups, and shapes it leaves alone
+    module(*[f"CONST robtarget p{i}:=[[{i}-1,20+0*n,-0.5],[1,0,0,0],[0,0,0,0],"
+             "[9E9,9E9,9E9,9E9,9E9,9E9]];" for i in range(4)],
+           "CONST robtarget q:=[[1+1 , 2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+           'VAR rec r1:=[[a{1},b.c],x+1,"s]",[1,2],[[1]]];',
+           'VAR rec r2:=[[a{2},b.c],x+1,"s]",[1,2],[[1]]];',
+           "VAR rec r3:=[[1-1,2],3];", "VAR rec r4:=[[1-1,2],3];",
+           "VAR rec r5:=[[f(1),(2)],[1,0,0,0] ];", "VAR rec r6:=[[1,2],[3]];",
+           'VAR rec r7:=[["a]",1],[2,3]];', "VAR rec r8:=[[1+1,[2]],[3]];",
+           "VAR rec r9:=[[1+1,2] ,[3]];"),
 ]
 
 
@@ -202,6 +213,13 @@ def test_an_aggregate_of_numbers_with_arithmetic_is_read_fast_to_the_plain_tree(
     """The loose aggregate pattern takes [1-1,2], whose numbers float() refuses: the
     expression reader builds it, instead of the whole file going to the plain grammar."""
     assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("value", ["[[1+1,2],]", "[[1+1,2],[3],,]", "[[1+1,2],[3]]]",
+                                   "[[1+1,2],[3] 4]", "[[1+1,2],[3],NOT]"])
+def test_a_position_with_arithmetic_before_a_broken_rest_is_refused_as_plain(value):
+    for _ in range(2):  # the second time with what follows the group known
+        assert_parses_as_plain(module(f"VAR rec r:={value};", "VAR rec s:=[[2+2,2],[3]];"))
 
 
 # ---------------------------------------------------------------- random expressions
