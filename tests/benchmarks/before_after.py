@@ -18,6 +18,9 @@ timed steps for both trees, and checks that both wrote the same bytes. The sets:
   at 200,000 lines, `named` at 60,000 and the odd shapes `five_axis` and `feeds` at
   20,000 (programs below the compiled kernels' threshold); timed the parse, the plan,
   the path check and the emission.
+- odd: the odd shapes slowest per line at 100,000 lines (arithmetic in the robtargets,
+  records in Offs arguments, statements stacked on IF lines, a distinct argument tail
+  per move, conditions); timed the parse, the plan and the emission.
 """
 
 from __future__ import annotations
@@ -59,6 +62,13 @@ CASES = {
         ("five_axis 20k", "five_axis", 20_000, True, "jointtargets"),
         ("feeds 20k", "feeds", 20_000, True, "jointtargets"),
     ),
+    "odd": (
+        ("expressions 100k", "expressions", 100_000, True, "jointtargets"),
+        ("records 100k", "records", 100_000, True, "jointtargets"),
+        ("stacked 100k", "stacked", 100_000, True, "jointtargets"),
+        ("tails 100k", "tails", 100_000, True, "jointtargets"),
+        ("conditions 100k", "conditions", 100_000, True, "jointtargets"),
+    ),
 }
 # what the child process times (CPU seconds, summed over calls), per set
 _TIMED = {
@@ -68,6 +78,8 @@ _TIMED = {
     "language": (("rapidfix.rapid.parse", None, "parse_source"),),
     "rewrite": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
                      ("parse_program", "plan_program", "refine_paths", "emit_edits")),
+    "odd": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
+                 ("parse_program", "plan_program", "emit_edits")),
 }
 
 

@@ -293,7 +293,13 @@ def program_with_expressions(draw: st.DrawFn) -> str:
     ]
     body = draw(st.lists(st.sampled_from(statements), min_size=1, max_size=4))
     decl = f"VAR num n:={values[-1]};"
-    return module(decl, "PROC main()", "  Stop;", *("  " + b for b in body), "ENDPROC")
+    # an aggregate whose first item is a flat group (fastpath._grouped_read): the group
+    # read each time, what follows it once per text (twice here: the second is known)
+    group = ",".join(v for v in values if "[" not in v and '"' not in v) or "1+1"
+    rest = ",".join(values[:2])
+    grouped = [f"VAR rec r{k}:=[[{group}{k}]{draw(SPACE)},{rest}];" for k in range(2)]
+    return module(decl, *grouped, "PROC main()", "  Stop;", *("  " + b for b in body),
+                  "ENDPROC")
 
 
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
