@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from itertools import repeat
+from typing import Any
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.instructions import RUNTIME_FUNCTIONS
@@ -62,37 +63,12 @@ class Evaluator:
             return self.lookup(expr.name)
         if kind is s.Number:
             return expr.value, "num"
-        if kind is s.LazyFunctionCall:
-            return self._lazy_call(expr)
-        if kind is s.Index:  # `path{12}`: an array of targets, element by element
-            return self._index(expr)
-        if isinstance(expr, s.NumericAggregate):
-            return expr.value, None
-        if isinstance(expr, s.Number):
-            return expr.value, "num"
-        if isinstance(expr, s.NameRef):
-            return self.lookup(expr.name)
-        if isinstance(expr, s.Aggregate):
-            return tuple(self.typed(item)[0] for item in expr.items), None
-        if isinstance(expr, s.String):
-            return expr.value, "string"
-        if isinstance(expr, s.Bool):
-            return expr.value, "bool"
-        if isinstance(expr, s.Paren):
-            return self.typed(expr.inner)
-        if isinstance(expr, s.Unary):
-            return self._unary(expr)
-        if isinstance(expr, s.Binary):
-            return self._binary(expr)
-        if isinstance(expr, s.Component):
-            return self._component(expr)
-        if isinstance(expr, s.Index):
-            return self._index(expr)
-        if isinstance(expr, s.Call):
-            return self._call(expr)
-        if isinstance(expr, s.Placeholder):
-            raise NotConstant(f"placeholder {expr.text}: code not yet written")
-        raise NotConstant(f"cannot evaluate {type(expr).__name__}")  # pragma: no cover
+        by_type = _TYPED.get(kind)
+        if by_type is None:  # a subclass of a node type: as its nearest base
+            by_type = next((_TYPED[base] for base in kind.__mro__ if base in _TYPED), None)
+            if by_type is None:
+                raise NotConstant(f"cannot evaluate {kind.__name__}")
+        return by_type(self, expr)
 
     # ------------------------------------------------------------ operators
     def _unary(self, expr: s.Unary) -> TypedValue:
@@ -206,6 +182,30 @@ class Evaluator:
         if failure is not None:
             raise NotConstant(failure)
         return _apply(expr, handler, [first, *required], optional)
+
+
+def _placeholder(evaluator: Evaluator, expr: s.Placeholder) -> TypedValue:
+    raise NotConstant(f"placeholder {expr.text}: code not yet written")
+
+
+# Evaluator.typed of each node type, by its exact type (one look-up, where a chain of
+# isinstance tests took up to a dozen for an operator).
+_TYPED: dict[type, Callable[[Evaluator, Any], TypedValue]] = {
+    s.NameRef: lambda ev, e: ev.lookup(e.name),
+    s.Number: lambda ev, e: (e.value, "num"),
+    s.LazyFunctionCall: Evaluator._lazy_call,
+    s.Index: Evaluator._index,  # `path{12}`: an array of targets, element by element
+    s.NumericAggregate: lambda ev, e: (e.value, None),
+    s.Aggregate: lambda ev, e: (tuple(ev.typed(item)[0] for item in e.items), None),
+    s.String: lambda ev, e: (e.value, "string"),
+    s.Bool: lambda ev, e: (e.value, "bool"),
+    s.Paren: lambda ev, e: ev.typed(e.inner),
+    s.Unary: Evaluator._unary,
+    s.Binary: Evaluator._binary,
+    s.Component: Evaluator._component,
+    s.Call: Evaluator._call,
+    s.Placeholder: _placeholder,
+}
 
 
 def _handler(expr: s.Call) -> Function:

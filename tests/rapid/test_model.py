@@ -436,3 +436,25 @@ def test_cyclic_garbage_frozen_by_a_build_is_collected_by_a_later_one(monkeypatc
     second = parse_program(_large_program(150))
     assert gone() is None
     assert len(first.motions) == 300 and len(second.motions) == 150
+
+
+def test_a_subclass_of_a_node_is_evaluated_as_its_base():
+    """Evaluator.typed looks a node's evaluation up by its exact type; a subclass (none
+    is made by rapidfix) falls back to its nearest base's, and a node of no known type
+    is refused with a reason."""
+    from rapidfix.rapid import syntax as s
+    from rapidfix.rapid.evaluate import Evaluator, NotConstant
+
+    class Sum(s.Binary):
+        pass
+
+    class Odd(s.Node):
+        pass
+
+    names = {"n": (2.0, "num")}
+    evaluator = Evaluator(names.__getitem__)
+    tree = Sum(0, 5, "*", s.NameRef(0, 1, "n"),
+               s.Paren(2, 5, s.Unary(3, 4, "-", s.Number(3, 4, 3.0, "3"))))
+    assert evaluator.typed(tree) == (-6.0, "num")
+    with pytest.raises(NotConstant, match="cannot evaluate Odd"):
+        evaluator.typed(Odd(0, 1))
