@@ -148,13 +148,13 @@ class Evaluator:
 
     def _lazy_call(self, expr: s.LazyFunctionCall) -> TypedValue:
         """_call of a function call whose further arguments are a shared tail: a tail of
-        constants is evaluated once (_constant_tail), the first argument every time."""
+        constants is evaluated once (_tail_values), the first argument every time."""
         head = expr.head
         if head is None or head.value is None:
             return self._call(expr)
-        constants = _constant_tail(expr.tail)
-        if constants is None:  # the tail's arguments, read by _constant_tail at offset 0
-            return self._call(expr, [head, *_TAIL_VALUES[id(expr.tail)][2]])
+        constants, arguments = _tail_values(expr.tail)
+        if constants is None:  # not all literals: its arguments as read, at offset 0
+            return self._call(expr, [head, *arguments])
         handler = _handler(expr)
         first = self.value(head.value)  # the first required argument, as _call takes it
         required, optional, failure = constants
@@ -172,7 +172,7 @@ class Evaluator:
 
         A program with a hundred thousand such calls has as many distinct texts: each
         needs its own value, but not the layers of the general route."""
-        constants = _constant_tail(expr.tail)
+        constants = _tail_values(expr.tail)[0]
         if constants is None:
             return None
         handler = _handler(expr)
@@ -234,10 +234,9 @@ def _no_names(name: str) -> TypedValue:  # pragma: no cover - only constants are
 
 
 _CONSTANT_NODES = (s.Number, s.NumericAggregate, s.String, s.Bool)
-# A shared argument tail (see s.LazyFunctionCall) -> (the tail, its values or None, its
-# arguments at offset 0 where they are not all literals: _lazy_call evaluates them, not
-# a second copy); the tail is kept so that its id is not reused while the entry lives.
-_TAIL_VALUES: dict[int, tuple[object, tuple | None, list[s.Argument]]] = {}
+# A shared argument tail (see s.LazyFunctionCall) -> (the tail, _tail_values of it); the
+# tail is kept so that its id is not reused while the entry lives.
+_TAIL_VALUES: dict[int, tuple[object, tuple[tuple | None, list[s.Argument]]]] = {}
 
 
 def _is_constant(expr: s.Expr | None) -> bool:
@@ -247,10 +246,12 @@ def _is_constant(expr: s.Expr | None) -> bool:
     return expr is None or type(expr) in _CONSTANT_NODES
 
 
-def _constant_tail(tail: s.ArgumentTail) -> tuple | None:
-    """(required values, optional values, the reason _call would refuse them or None) of
-    the arguments of a tail of literals, as _call reads them after a call's first
-    argument; None when a tail argument holds a name (then evaluated in its scope)."""
+def _tail_values(tail: s.ArgumentTail) -> tuple[tuple | None, list[s.Argument]]:
+    """(constants, arguments) of a shared tail. constants: (required values, optional
+    values, the reason _call would refuse them or None) of a tail of literals, as _call
+    reads them after a call's first argument; None when a tail argument holds a name
+    (then evaluated in its scope: `arguments` are the tail's, at offset 0, so that they
+    are not made twice; [] for a tail of literals)."""
     cached = _TAIL_VALUES.get(id(tail))
     if cached is not None and cached[0] is tail:
         return cached[1]
@@ -270,8 +271,9 @@ def _constant_tail(tail: s.ArgumentTail) -> tuple | None:
             result = ((), {}, err.reason)
     if len(_TAIL_VALUES) >= 4096:
         _TAIL_VALUES.clear()
-    _TAIL_VALUES[id(tail)] = (tail, result, [] if result is not None else arguments)
-    return result
+    values = (result, [] if result is not None else arguments)
+    _TAIL_VALUES[id(tail)] = (tail, values)
+    return values
 
 
 def _num_op(op: str, a: float, b: float) -> TypedValue:

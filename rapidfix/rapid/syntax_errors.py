@@ -15,6 +15,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid.error_window import confirms, error_offset, window
+from rapidfix.rapid.fast_expressions import STRING
 from rapidfix.rapid.grammar import diagnosis_parser, terminal_patterns
 from rapidfix.rapid.source import SourceText
 
@@ -38,7 +39,7 @@ _GROUPS: tuple[tuple[str, frozenset[str], int], ...] = (
 )
 
 # Strings and comments are skipped so that '<SMT>' inside them is left alone.
-_PLACEHOLDER_SCAN = re.compile(r'"[^"\r\n]*(?:""[^"\r\n]*)*"|![^\n]*|<[A-Z]{2,8}>')
+_PLACEHOLDER_SCAN = re.compile(rf"{STRING}|![^\n]*|<[A-Z]{{2,8}}>")
 
 
 def describe_terminal(name: str) -> str | None:
