@@ -740,6 +740,8 @@ class CallTail:
 _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 _READ: Memo = Memo(TAIL_LIMIT)
+# The optional arguments before a call's first required one (see split_calls).
+_LEADS: Memo = Memo(TAIL_LIMIT)
 # The argument values of tails, read once per distinct text (see _value_entry).
 _ENTRIES: Memo = Memo(4 * TAIL_LIMIT)
 # What follows an aggregate's first group -> the aggregate read with a stand-in first
@@ -781,11 +783,32 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 calls.append(_assignment(text, base, m.start(1), assign, pos))
                 continue
         tail = tails.get(tail_text)
-        if first is None:
+        lead = None
+        if first is None and tail is not None:
             head_arg = second_arg = None
+        elif first is None:  # optional arguments first (`MoveJ \Conc, p1, ...`)?
+            piece = piece_at(text, tail_at)
+            while piece.group(1) is not None:
+                piece = piece_at(text, piece.end())
+            first = piece.group(4)
+            head_arg = second_arg = None
+            if first is not None and piece.start(4) > tail_at:
+                # the switches before the first required value are a lead read once,
+                # the value is the call's own, and the rest a tail as after any head
+                lead_text = text[tail_at:piece.start(4)]
+                lead = _LEADS.get(lead_text)
+                if lead is None:
+                    lead = CallTail(lead_text)
+                    _LEADS.keep(lead_text, lead)
+                at = base + piece.start(4)
+                node = _head_node(first, at)
+                head_arg = argument(at, node.end, "required", None, node)
+                tail_at = piece.end()
+                tail_text = text[tail_at:pos]
+                tail = tails.get(tail_text)
         else:
             at = base + m.start(2)
-            # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`, TRUE or FALSE)
+            # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`, TRUE or FALSE), as _head_node
             if first.isidentifier() and (len(first) > 5 or first.upper() not in _BOOLS):
                 node: s.Expr = name_ref(at, at + len(first), intern(first))
             else:
@@ -819,8 +842,16 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
         if last is not None and last.end == shift:  # one int object, not two equal ones
             shift = last.end
         calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
-                               tail, shift, second_arg))
+                               tail, shift, second_arg, lead))
     return calls
+
+
+def _head_node(text: str, at: int) -> s.Expr:
+    """The node of a call's first required value `text` at `at`: a name (not `a.b`,
+    `a+1`, `f(x)`, `a{i}`, TRUE or FALSE) made at once, any other by _value_node."""
+    if text.isidentifier() and (len(text) > 5 or text.upper() not in _BOOLS):
+        return s.NameRef(at, at + len(text), sys.intern(text))
+    return _value_node(text, at)
 
 
 def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.Assignment:
@@ -940,7 +971,7 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _ENTRIES, _AGGREGATE_RESTS, _RESTS,
+    for memo in (_TAILS, _INNER_TAILS, _READ, _LEADS, _ENTRIES, _AGGREGATE_RESTS, _RESTS,
                  _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 

@@ -92,8 +92,7 @@ class _SharedTail:
         targets = motion.targets
         arguments = {key: targets[i] for key, i in zip(self.head_keys, self.target_of_head)}
         optional: dict[str, Operand] = {}
-        for (is_optional, key, first), arg in zip(self.entries,
-                                                  motion.syntax.args[len(self.head_keys):]):
+        for (is_optional, key, first), arg in zip(self.entries, motion.syntax.shared_args()):
             (optional if is_optional else arguments)[key] = Operand(
                 arg, first.source, first.given_text, first.form, first.name, first.type_name,
                 first.value, first.static, first.reason, first.declaration)
@@ -582,7 +581,7 @@ class ModelBuilder:
             return None
         entries = []
         index = n_heads
-        for arg in call.args[n_heads:]:
+        for arg in call.shared_args():
             if arg.name is not None and arg.kind == "required":  # `Name:=value`: by name
                 return None
             if arg.kind == "required":
@@ -655,8 +654,10 @@ class ModelBuilder:
                 module_name = module_names[module]
             if type(call) is lazy_call:
                 head = call.head
-                # (the same tail after one leading argument or after two is shared apart)
-                tail = id(call.tail) if call.second is None else (id(call.tail), 2)
+                # (the same tail after one leading argument or after two, or after a
+                # lead, is shared apart)
+                tail = (id(call.tail) if call.second is None and call.lead is None
+                        else (id(call.tail), 2 if call.lead is None else id(call.lead)))
                 shared = shared_tails.get(tail, False)
                 if type(shared) is tuple:  # the second call with this tail: share it now
                     shared = shared_tails[tail] = self._shared_tail(*shared)

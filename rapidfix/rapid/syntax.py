@@ -197,19 +197,24 @@ class LazyCall(ProcedureCall):
 
     A CAM program's hundred thousand moves differ only in their targets, and most
     readers never look past them: the nodes of the rest are made on demand.
-    `args` is the same list of nodes a ProcedureCall holds (`heads` first).
+    `args` is the same list of nodes a ProcedureCall holds: the optional arguments of
+    a shared `lead` before `head` (`MoveJ \\Conc, p1, ...`; they stand right after the
+    name), then `heads`, then the tail's.
     """
 
-    __slots__ = ("head", "second", "shift", "tail")
+    __slots__ = ("head", "lead", "second", "shift", "tail")
 
     def __init__(self, start: int, end: int, name: str, head: Argument | None,
-                 tail: ArgumentTail, shift: int, second: Argument | None = None) -> None:
+                 tail: ArgumentTail, shift: int, second: Argument | None = None,
+                 lead: ArgumentTail | None = None) -> None:
         self.start, self.end, self.name = start, end, name
         self.head, self.second, self.tail, self.shift = head, second, tail, shift
+        self.lead = lead
 
     @property
     def heads(self) -> tuple[Argument, ...]:
-        """The leading arguments before the tail: none, `head`, or `head` and `second`."""
+        """The leading arguments the call's own (not shared): none, `head`, or `head`
+        and `second`."""
         if self.head is None:
             return ()
         return (self.head,) if self.second is None else (self.head, self.second)
@@ -222,8 +227,20 @@ class LazyCall(ProcedureCall):
             args = self.tail.arguments(self.shift)
             if self.head is not None:
                 args[0:0] = self.heads
+            if self.lead is not None:
+                args[0:0] = self.lead.arguments(self.start + len(self.name))
             _CALL_ARGS.__set__(self, args)
             return args
+
+    def shared_args(self) -> list[Argument]:
+        """`args` but `heads`: the arguments of the shared lead and tail, in order."""
+        args, n = self.args, len(self.heads)
+        if self.lead is None:
+            return args[n:]
+        at = 0  # a lead holds optional arguments only; `head` is required
+        while args[at].kind != "required":
+            at += 1
+        return args[:at] + args[at + n:]
 
 
 @dataclass(slots=True, eq=False)

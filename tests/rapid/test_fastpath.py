@@ -445,6 +445,12 @@ PIECES = [
     "<SMT>",
     "MoveL <ARG>,v1,z1,t;",
     "Foo <EXP>, <ID>;",
+    "MoveJ \\Conc, p1, v1000, z50, tool0;",
+    "MoveJ \\Conc,Offs(p1,0,0,1),v100,z1,tool0\\WObj:=w;",
+    "Foo \\A \\B:=-1, [1,2], 2 \\C;",
+    "WaitTime \\InPos, 0.5;",
+    "Foo \\A;",
+    "Foo \\A:=f(1,2) , x.y;",
 ]
 DATA = [
     f"CONST robtarget p:={TARGET};",

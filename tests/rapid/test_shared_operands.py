@@ -146,6 +146,27 @@ def test_moves_whose_second_argument_varies_share_their_tail():
         ["c0", "d0"], ["c1", "d1"], ["c2", "d2"], ["c3", "d3"]]
 
 
+def test_moves_with_switches_before_their_target_share_them_and_their_tail():
+    # `MoveJ \\Conc, p1, ...`: the switch and what follows the target recur, the target
+    # changes; each part is read once and the moves share both
+    lines = [f"CONST robtarget c{i}:={TARGET};" for i in range(5)]
+    moves = [f"    MoveJ \\Conc, c{i}, v100, z1, gun\\WObj:=table;" for i in range(5)]
+    text = CELL.replace("  PROC main()\n", "  " + "\n  ".join(lines) + "\n  PROC main()\n"
+                        + "\n".join(moves) + "\n")
+    forget_texts()
+    program = assert_same_model(text)
+    conc = [m for m in program.motions if m.syntax.start < text.index("MoveL p1,v100")]
+    assert [m.target.name for m in conc] == [f"c{i}" for i in range(5)]
+    assert all(m.syntax.lead is conc[0].syntax.lead is not None for m in conc)
+    assert conc[0].shared is None and all(m.shared is conc[1].shared is not None
+                                          for m in conc[1:])
+    assert all(list(m.optional) == ["conc", "wobj"] for m in conc)
+    # a lone `\\Conc,p1,...` (another lead text, another tail) has its own
+    lone = next(m for m in program.motions if m.syntax.start == text.index("MoveL \\Conc"))
+    assert lone.syntax.lead not in (None, conc[0].syntax.lead)
+    assert lone.syntax.tail is not conc[0].syntax.tail and lone.shared is None
+
+
 MOVES = [
     "MoveL p1,v100,z1,gun\\WObj:=table;",
     "MoveL p2,v100,z1,gun\\WObj:=table;",
@@ -170,6 +191,11 @@ MOVES = [
     "MoveL p1,v100\\V:=undeclared,z1,gun\\WObj:=[1,2];",
     "SetDO do1, 1;",
     "gun.tframe.trans.z:=1;",
+    "MoveJ \\Conc,p1,v100,z1,gun\\WObj:=table;",
+    "MoveJ \\Conc, p2, v100, z1, gun\\WObj:=table;",
+    "MoveL \\Conc \\ID:=5,p2,v100,z1,gun;",
+    "MoveL \\Conc,Offs(p1,0,0,-1),v100,z1,gun;",
+    "MoveC \\Conc,p1,p2,v100,z1,gun;",
 ]
 
 
