@@ -28,6 +28,9 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                style), declared and inline targets, some declarations over three lines
 - latin1:      a Swedish or German cell: targets, tool, work object, speed and routines
                named with the letters of ISO 8859-1 RAPID allows (`pÖver`, `tFräs`)
+- concurrent:  a handling cell: switches before the target (`MoveJ \\Conc, p1, ...`,
+               `MoveL \\Conc, Offs(p1,0,0,50), ...`), some with `\\ID`, and
+               `WaitTime \\InPos` between the moves
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -45,7 +48,8 @@ from rapidfix.kinematics import load_robot
 
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
-              "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1")
+              "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
+              "concurrent")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -352,13 +356,27 @@ def _latin1(n: int) -> list[str]:
             "  ENDPROC", "ENDMODULE"]
 
 
+def _concurrent(n: int) -> list[str]:
+    moves = []
+    for k in range(n):
+        if k % 3 == 0:
+            moves.append(f"    MoveJ \\Conc, p{k}, v1000, z50, tMill\\WObj:=wPlate;")
+        elif k % 3 == 1:
+            moves.append(f"    MoveL \\Conc, Offs(p{k},0,0,50), v500, z10, tMill\\WObj:=wPlate;")
+        else:
+            moves.append(f"    MoveL \\Conc \\ID:={k % 7}, p{k}, v200, fine, tMill\\WObj:=wPlate;")
+        if k % 10 == 9:
+            moves.append("    WaitTime \\InPos, 0.1;")
+    return [*_head("Handling"), *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
              "records": _records, "messages": _messages, "conditions": _conditions,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
              "remarks": _remarks, "spaced": _spaced,
-             "latin1": _latin1}
+             "latin1": _latin1, "concurrent": _concurrent}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
