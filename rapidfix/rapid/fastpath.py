@@ -508,7 +508,7 @@ def _read(text: str, start: int) -> s.Expr:
     if known is not None:
         return _moved(known, start - known.start)
     try:
-        node = read_expression(text, start, condition=True)
+        node = _read_by_shape(text, start)
     except NotRead:
         raise NotFast(text) from None
     # kept as read: syntax nodes are never changed, and a later use of the text gets
@@ -519,6 +519,96 @@ def _read(text: str, start: int) -> s.Expr:
 
 #: the longest expression text _read keeps (see there)
 READ_KEPT_CHARS = 256
+
+# Every digit made a 1: texts that differ only in their digits (`Offs(p17,0,0,-nZ*2)`,
+# `Offs(p18,0,0,-nZ*3)`) have one shape.
+_ONES = bytes.maketrans(b"0123456789", b"1111111111")
+# A radix prefix (0x1F, 0b101, 0o17): its digits decide how the text is read, so such a
+# text has no shape (also where it is only part of a name, `p0x`: read in full)
+_RADIX = re.compile(r"0[xXbBoO]").search
+
+
+class _NoShape(Exception):
+    """A node _reshaped cannot make from a text's shape (read the text in full)."""
+
+
+def _read_by_shape(text: str, start: int) -> s.Expr:
+    """read_expression(text, start, condition=True), read once per shape of the text.
+
+    Digits do not change how a value is read: they stand in numbers and names, whose
+    tokens a different digit keeps as they are (but after `0x`, `0b`, `0o`, and in a
+    string, which are read in full). So the nodes of a text whose digits alone differ
+    from one read before are that one's nodes at the new place, with the numbers and
+    names taken from the new text (_reshaped): a program's expressions often differ only
+    in the target they name or the numbers they hold. NotRead as read_expression."""
+    key = None
+    if '"' not in text and _RADIX(text) is None:
+        key = text.encode().translate(_ONES)
+        shape = _SHAPES.get(key)
+        if shape is not None:
+            node, at = shape
+            try:
+                return _reshaped(node, start - at, text, at)
+            except _NoShape:
+                _SHAPES[key] = None  # (it holds what cannot be moved: read in full)
+                key = None
+    node = read_expression(text, start, condition=True)
+    if key is not None and key not in _SHAPES:
+        _SHAPES.keep(key, (node, start))
+    return node
+
+
+def _reshaped(node: Any, shift: int, text: str, at: int) -> Any:
+    """A copy of a node of a text standing at `at`, moved by `shift`, its numbers and
+    names read from `text` (another text of the same shape, standing at `at + shift`)."""
+    make = _RESHAPERS.get(type(node))
+    if make is None:
+        raise _NoShape(type(node).__name__)
+    return make(node, shift, text, at)
+
+
+def _reshaped_argument(n: s.Argument, d: int, text: str, at: int) -> s.Argument:
+    name = n.name
+    if name is not None and not name.isalpha():  # a digit may be in it: not moved
+        raise _NoShape(name)
+    return s.Argument(n.start + d, n.end + d, n.kind, name,
+                      None if n.value is None else _reshaped(n.value, d, text, at))
+
+
+def _reshaped_number(n: s.Number, d: int, text: str, at: int) -> s.Number:
+    number = text[n.start - at:n.end - at]
+    return s.Number(n.start + d, n.end + d, number_value(number), number)
+
+
+_intern = sys.intern
+# How each node type read_expression makes is made from a text's shape (by exact type).
+_RESHAPERS: dict[type, Callable[[Any, int, str, int], Any]] = {
+    s.NameRef: lambda n, d, t, a: s.NameRef(n.start + d, n.end + d,
+                                            _intern(t[n.start - a:n.end - a])),
+    s.Number: _reshaped_number,
+    s.Bool: lambda n, d, t, a: s.Bool(n.start + d, n.end + d, n.value),
+    s.NumericAggregate: lambda n, d, t, a: s.NumericAggregate(
+        n.start + d, n.end + d, numeric_aggregate_value(t[n.start - a:n.end - a])),
+    s.Binary: lambda n, d, t, a: s.Binary(n.start + d, n.end + d, n.op,
+                                          _reshaped(n.left, d, t, a),
+                                          _reshaped(n.right, d, t, a)),
+    s.Unary: lambda n, d, t, a: s.Unary(n.start + d, n.end + d, n.op,
+                                        _reshaped(n.operand, d, t, a)),
+    s.Paren: lambda n, d, t, a: s.Paren(n.start + d, n.end + d, _reshaped(n.inner, d, t, a)),
+    # (a component's name ends the node)
+    s.Component: lambda n, d, t, a: s.Component(
+        n.start + d, n.end + d, _reshaped(n.base, d, t, a),
+        _intern(t[n.end - a - len(n.name):n.end - a])),
+    s.Index: lambda n, d, t, a: s.Index(n.start + d, n.end + d, _reshaped(n.base, d, t, a),
+                                        [_reshaped(i, d, t, a) for i in n.indices]),
+    s.Aggregate: lambda n, d, t, a: s.Aggregate(n.start + d, n.end + d,
+                                                [_reshaped(i, d, t, a) for i in n.items]),
+    # (a call's name starts the node)
+    s.Call: lambda n, d, t, a: s.Call(n.start + d, n.end + d,
+                                      _intern(t[n.start - a:n.start - a + len(n.name)]),
+                                      [_reshaped(arg, d, t, a) for arg in n.args]),
+    s.Argument: _reshaped_argument,
+}
 
 
 def _grouped_read(text: str, start: int) -> s.Aggregate | None:
@@ -536,7 +626,7 @@ def _grouped_read(text: str, start: int) -> s.Aggregate | None:
     rest = text[cut + 1:]
     items = _AGGREGATE_RESTS.get(rest)
     try:
-        first = read_expression(text[1:cut + 1], start + 1, condition=True)
+        first = _read_by_shape(text[1:cut + 1], start + 1)
         if items is None:  # read after a stand-in first item (a name), at offset 0
             items = read_expression("[x" + rest, 0, condition=True)
             if type(items) is not s.Aggregate:
@@ -740,6 +830,9 @@ class CallTail:
 _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
 _READ: Memo = Memo(TAIL_LIMIT)
+# The shape of an expression text (its digits made 1s) -> its nodes and where the text
+# stood (see _read_by_shape), or None for a shape whose nodes are read in full.
+_SHAPES: Memo = Memo(TAIL_LIMIT)
 # The optional arguments before a call's first required one (see split_calls).
 _LEADS: Memo = Memo(TAIL_LIMIT)
 # The argument values of tails, read once per distinct text (see _value_entry).
@@ -971,8 +1064,8 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _LEADS, _ENTRIES, _AGGREGATE_RESTS, _RESTS,
-                 _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _READ, _SHAPES, _LEADS, _ENTRIES, _AGGREGATE_RESTS,
+                 _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

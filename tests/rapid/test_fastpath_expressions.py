@@ -22,9 +22,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of t
 from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
 from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
+from rapidfix.rapid import fastpath
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NotRead, read_expression
-from rapidfix.rapid.fastpath import fast_parser
+from rapidfix.rapid.fastpath import fast_parser, forget_texts
 from rapidfix.rapid.grammar import rapid_parser
 
 # Statements the fast terminals take whole (each becomes a call of a fast run).
@@ -369,3 +370,61 @@ def test_the_depth_of_a_table_is_that_of_its_nodes():
     assert _depth(node) == 4
     # the aggregates, the negation, the parentheses, the sum, the component, the name
     assert _depth(read_expression("[[1,2],[3,-(4+a.b)]]", 0)) == 7
+
+
+# ------------------------------------------------ texts read once per shape of digits
+@st.composite
+def same_shape(draw: st.DrawFn) -> tuple[str, str]:
+    """An expression, and the same with other digits (names and numbers changed)."""
+    text = draw(expression())
+    return text, re.sub(r"\d", lambda _: draw(st.sampled_from("0123456789")), text)
+
+
+def _read_or_none(read, text: str, start: int):
+    try:
+        return shape(read(text, start))
+    except NotRead:
+        return None
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(same_shape(), st.integers(0, 40))
+def test_a_text_of_a_known_shape_is_read_as_in_full(pair, shift):
+    # the second text's nodes come from the first's shape (fastpath._read_by_shape): the
+    # same nodes, numbers and names as read_expression gives, or the same refusal
+    first, second = pair
+    forget_texts()
+    _read_or_none(fastpath._read_by_shape, first, 10)
+    expected = _read_or_none(lambda t, at: read_expression(t, at, condition=True), second,
+                             10 + shift)
+    assert _read_or_none(fastpath._read_by_shape, second, 10 + shift) == expected
+
+
+def test_texts_that_differ_in_their_digits_share_a_shape_not_their_nodes():
+    forget_texts()
+    first = fastpath._read_by_shape("Offs(p17,0,rTool.tframe.trans.x1*2,-nZ*0.5)", 100)
+    second = fastpath._read_by_shape("Offs(p18,0,rTool.tframe.trans.x2*3,-nZ*7.5)", 300)
+    assert len(fastpath._SHAPES) == 1
+    assert shape(second) == shape(read_expression(
+        "Offs(p18,0,rTool.tframe.trans.x2*3,-nZ*7.5)", 300, condition=True))
+    assert second.args[0].value.name == "p18" and second.args[2].value.right.value == 3.0
+    assert second.args[2].value.left.name == "x2"
+
+    def nodes(node):
+        yield node
+        for f in dataclasses.fields(node):
+            value = getattr(node, f.name)
+            for item in value if isinstance(value, list) else [value]:
+                if dataclasses.is_dataclass(item):
+                    yield from nodes(item)
+
+    assert not {id(n) for n in nodes(first)} & {id(n) for n in nodes(second)}
+    # a radix prefix decides how its digits read: such a text is read in full
+    for text in ("f(0x1F)", "f(0b11)", "f(p0x)"):
+        fastpath._read_by_shape(text, 0)
+    assert len(fastpath._SHAPES) == 1
+    # a shape whose nodes cannot be made again (an optional argument named with a digit)
+    # is read in full from then on
+    fastpath._read_by_shape("f(1\\A1:=2)", 0)
+    again = fastpath._read_by_shape("f(2\\A2:=3)", 0)
+    assert again.args[1].name == "A2" and fastpath._SHAPES[b"f(1\\A1:=1)"] is None
