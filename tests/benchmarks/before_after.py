@@ -20,7 +20,8 @@ timed steps for both trees, and checks that both wrote the same bytes. The sets:
   the path check and the emission.
 - odd: the odd shapes slowest per line at 100,000 lines (arithmetic in the robtargets,
   records in Offs arguments, statements stacked on IF lines, a distinct argument tail
-  per move, conditions); timed the parse, the plan and the emission.
+  per move, conditions, switches before the target); timed the parse, the plan and the
+  emission.
 """
 
 from __future__ import annotations
@@ -68,6 +69,7 @@ CASES = {
         ("stacked 100k", "stacked", 100_000, True, "jointtargets"),
         ("tails 100k", "tails", 100_000, True, "jointtargets"),
         ("conditions 100k", "conditions", 100_000, True, "jointtargets"),
+        ("concurrent 100k", "concurrent", 100_000, True, "jointtargets"),
     ),
 }
 # what the child process times (CPU seconds, summed over calls), per set
