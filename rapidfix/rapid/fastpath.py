@@ -857,7 +857,7 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     """
     calls: list[s.Statement] = []
     tails = _TAILS
-    argument, name_ref, lazy_call, intern = s.Argument, s.NameRef, s.LazyCall, sys.intern
+    argument, lazy_call, intern = s.Argument, s.LazyCall, sys.intern
     head, find, piece_at = _CALL_HEAD.compiled.match, text.index, CALL_PIECE.compiled.match
     quote, statement_end = text.find, _STATEMENT_END.match
     pos, size = 0, len(text)
@@ -901,11 +901,7 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 tail = tails.get(tail_text)
         else:
             at = base + m.start(2)
-            # a name (not `a.b`, `a+1`, `f(x)`, `a{i}`, TRUE or FALSE), as _head_node
-            if first.isidentifier() and (len(first) > 5 or first.upper() not in _BOOLS):
-                node: s.Expr = name_ref(at, at + len(first), intern(first))
-            else:
-                node = _value_node(first, at)
+            node = _head_node(first, at)
             head_arg, second_arg = argument(at, node.end, "required", None, node), None
             if tail is None:
                 piece = piece_at(text, tail_at)

@@ -213,8 +213,8 @@ class LazyCall(ProcedureCall):
 
     @property
     def heads(self) -> tuple[Argument, ...]:
-        """The leading arguments the call's own (not shared): none, `head`, or `head`
-        and `second`."""
+        """The call's own leading arguments (not shared): none, `head`, or `head` and
+        `second`."""
         if self.head is None:
             return ()
         return (self.head,) if self.second is None else (self.head, self.second)
