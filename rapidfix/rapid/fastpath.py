@@ -543,7 +543,7 @@ def _read_by_shape(text: str, start: int) -> s.Expr:
     in the target they name or the numbers they hold. NotRead as read_expression."""
     key = None
     if '"' not in text and _RADIX(text) is None:
-        key = text.encode().translate(_ONES)
+        key = text.encode("utf-8", "surrogatepass").translate(_ONES)
         shape = _SHAPES.get(key)
         if shape is not None:
             node, at = shape
