@@ -876,15 +876,12 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 calls.append(_assignment(text, base, m.start(1), assign, pos))
                 continue
         tail = tails.get(tail_text)
-        lead = None
-        if first is None and tail is not None:
-            head_arg = second_arg = None
-        elif first is None:  # optional arguments first (`MoveJ \Conc, p1, ...`)?
+        lead = head_arg = second_arg = None
+        if first is None and tail is None:  # optional arguments first (`MoveJ \Conc, p1`)?
             piece = piece_at(text, tail_at)
             while piece.group(1) is not None:
                 piece = piece_at(text, piece.end())
             first = piece.group(4)
-            head_arg = second_arg = None
             if first is not None and piece.start(4) > tail_at:
                 # the switches before the first required value are a lead read once,
                 # the value is the call's own, and the rest a tail as after any head
@@ -899,10 +896,10 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 tail_at = piece.end()
                 tail_text = text[tail_at:pos]
                 tail = tails.get(tail_text)
-        else:
+        elif first is not None:
             at = base + m.start(2)
             node = _head_node(first, at)
-            head_arg, second_arg = argument(at, node.end, "required", None, node), None
+            head_arg = argument(at, node.end, "required", None, node)
             if tail is None:
                 piece = piece_at(text, tail_at)
                 second = piece.group(4)

@@ -654,10 +654,14 @@ class ModelBuilder:
                 module_name = module_names[module]
             if type(call) is lazy_call:
                 head = call.head
-                # (the same tail after one leading argument or after two, or after a
-                # lead, is shared apart)
-                tail = (id(call.tail) if call.second is None and call.lead is None
-                        else (id(call.tail), 2 if call.lead is None else id(call.lead)))
+                # (the same tail after one leading argument, after two, or after a lead
+                # of switches is shared apart)
+                if call.lead is not None:
+                    tail = (id(call.tail), id(call.lead))
+                elif call.second is not None:
+                    tail = (id(call.tail), 2)
+                else:
+                    tail = id(call.tail)
                 shared = shared_tails.get(tail, False)
                 if type(shared) is tuple:  # the second call with this tail: share it now
                     shared = shared_tails[tail] = self._shared_tail(*shared)
