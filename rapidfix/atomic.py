@@ -17,7 +17,6 @@ import errno
 import os
 import re
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -30,7 +29,7 @@ _IN_PROGRESS: set[str] = set()
 
 
 def _temp_pattern(name: str) -> re.Pattern[str]:
-    """Names of the temporary files of target `name` (mkstemp adds 8 characters)."""
+    """Names of the temporary files of target `name` (8 random characters)."""
     return re.compile(rf"^\.{re.escape(name)}\.(?:(\d+)-)?[A-Za-z0-9_]{{8}}\.tmp$")
 
 
@@ -76,6 +75,31 @@ def remove_stale_temporaries(target: str | Path, *, now: float | None = None) ->
     return removed
 
 
+def _create_temporary(target: Path) -> tuple[int, str]:
+    """Create the temporary file for `target`; returns its descriptor and path.
+
+    The name is registered in `_IN_PROGRESS` before the file exists: a SIGTERM handler
+    runs as soon as the call that creates it returns, and must find it to remove it.
+    """
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
+    for _ in range(100):
+        tmp = os.path.join(os.path.abspath(target.parent),
+                           f".{target.name}.{os.getpid()}-{os.urandom(4).hex()}.tmp")
+        _IN_PROGRESS.add(tmp)
+        try:
+            return os.open(tmp, flags, 0o600), tmp
+        except FileExistsError:
+            _IN_PROGRESS.discard(tmp)
+        except BaseException:  # e.g. Ctrl-C raised as the file was made
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            _IN_PROGRESS.discard(tmp)
+            raise
+    raise FileExistsError(errno.EEXIST, "no free name for a temporary file", str(target))
+
+
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
     """Write `data` to `path` atomically, creating parent folders; return the path."""
     target = Path(path)
@@ -83,9 +107,7 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
         raise IsADirectoryError(errno.EISDIR, "is a folder, a file name is needed", str(target))
     target.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(target)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}-", suffix=".tmp",
-                               dir=target.parent)
-    _IN_PROGRESS.add(tmp)
+    fd, tmp = _create_temporary(target)
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)

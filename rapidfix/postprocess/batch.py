@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rapidfix.atomic import exit_on_sigterm, write_bytes_atomic
+from rapidfix.atomic import exit_on_sigterm, remove_stale_temporaries, write_bytes_atomic
 from rapidfix.digest import sha256_file
 from rapidfix.exceptions import OutputExistsError, RapidfixError
 from rapidfix.postprocess.compensator import Compensator
@@ -370,20 +370,34 @@ def _run_parallel(jobs: list[_Job], workers: int,
                 _advance(bar, outcome, on_result)
                 submit_next()
     except BaseException:
-        _stop(pool)
+        _stop(pool, [Path(job[1]) for job in running.values()])
         raise
     pool.shutdown(wait=True)
 
 
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel what has not started and terminate the workers (SIGTERM: they clean up)."""
+#: how long a stopped worker is given to remove its temporary file and end (seconds)
+STOP_WAIT_S = 5.0
+
+
+def _stop(pool: ProcessPoolExecutor, targets: list[Path]) -> None:
+    """Cancel what has not started and terminate the workers (SIGTERM: they clean up).
+    A worker that does not end within STOP_WAIT_S is killed, and the temporary files of
+    the `targets` it was writing are removed here."""
     processes = list(getattr(pool, "_processes", {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         if process.is_alive():
             process.terminate()
+    killed = False
     for process in processes:
-        process.join(timeout=5)
+        process.join(timeout=STOP_WAIT_S)
+        if process.is_alive():
+            process.kill()
+            process.join(timeout=STOP_WAIT_S)
+            killed = True
+    if killed:
+        for target in targets:
+            remove_stale_temporaries(target)
 
 
 _STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}

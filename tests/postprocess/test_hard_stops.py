@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -131,6 +132,33 @@ def test_ctrl_c_stops_a_parallel_batch_and_starts_no_new_file(cell, tmp_path):
     assert done_at_signal <= len(written) <= done_at_signal + 2 < files
     assert not list(out.glob(".*.tmp"))
 
+
+
+def _hang_while_writing(target: str) -> None:
+    """A worker stuck in a write that SIGTERM does not end (e.g. in a long C call)."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    atomic._create_temporary(Path(target))
+    time.sleep(600)
+
+
+def test_a_worker_that_does_not_stop_is_killed_and_its_temporary_removed(tmp_path,
+                                                                        monkeypatch):
+    from concurrent.futures import ProcessPoolExecutor
+
+    from rapidfix.postprocess import batch
+
+    target = tmp_path / "p.mod"
+    pool = ProcessPoolExecutor(max_workers=1)
+    pool.submit(_hang_while_writing, str(target))
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob(".*.tmp")) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert len(list(tmp_path.glob(".*.tmp"))) == 1
+    workers = list(pool._processes.values())
+    monkeypatch.setattr(batch, "STOP_WAIT_S", 0.5)
+    batch._stop(pool, [target])
+    assert not any(w.is_alive() for w in workers)
+    assert list(tmp_path.iterdir()) == []
 
 # ---- 14: path tolerance and the true reasons ---------------------------------------------
 

@@ -195,3 +195,43 @@ def test_sigterm_in_the_middle_of_a_write_removes_the_temporary_file(tmp_path, p
     proc.terminate()
     assert proc.wait(timeout=60) == 143
     assert _temporaries(tmp_path) == [] and not out.exists()
+
+
+def _stopped_as_the_file_is_made(stop):
+    """An `os.open` that makes the file, then runs `stop` as a signal handler would:
+    as soon as the call returns, before the writer holds the name."""
+    real_open = os.open
+
+    def open_then_stop(path, flags, mode=0o777, **kwargs):
+        fd = real_open(path, flags, mode, **kwargs)
+        if str(path).endswith(".tmp"):
+            os.close(fd)
+            stop()
+        return fd
+
+    return open_then_stop
+
+
+def test_sigterm_as_the_temporary_file_is_made_leaves_nothing(tmp_path, monkeypatch):
+    from rapidfix import atomic
+
+    def exit_on_sigterm():  # what the worker's handler does, without leaving pytest
+        atomic.remove_own_temporaries()
+        raise SystemExit(143)
+
+    monkeypatch.setattr(atomic.os, "open", _stopped_as_the_file_is_made(exit_on_sigterm))
+    with pytest.raises(SystemExit):
+        atomic.write_bytes_atomic(tmp_path / "out.mod", b"data")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_as_the_temporary_file_is_made_leaves_nothing(tmp_path, monkeypatch):
+    from rapidfix import atomic
+
+    def ctrl_c():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(atomic.os, "open", _stopped_as_the_file_is_made(ctrl_c))
+    with pytest.raises(KeyboardInterrupt):
+        atomic.write_bytes_atomic(tmp_path / "out.mod", b"data")
+    assert list(tmp_path.iterdir()) == [] and not atomic._IN_PROGRESS
