@@ -954,6 +954,11 @@ def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.As
     return s.Assignment(target.start, base + end, target, value)
 
 
+# The end of an aggregate's first group and the start of the next, with whitespace
+# (`[[x, y, z], [q1, ...], ...]`, as many programs are written by hand)
+_NEXT_GROUP = re.compile(rf"\]{WS}*,{WS}*\[")
+
+
 def grouped_value(value: str, rests: Memo) -> tuple | None:
     """The value of a plain aggregate `[[x,y,z],[...],...]` whose first item is a group
     of numbers: that group read every time (a position seldom recurs, so it is not
@@ -961,7 +966,7 @@ def grouped_value(value: str, rests: Memo) -> tuple | None:
     NotFast where the loose pattern let arithmetic by (`[[1-1,2],[3]]`)."""
     cut = value.find("]")
     group = value[2:cut]
-    if "[" in group or not value.startswith("],[", cut):
+    if "[" in group or not (value.startswith("],[", cut) or _NEXT_GROUP.match(value, cut)):
         return None
     rest = value[cut + 1:]
     items = rests.get(rest)
@@ -982,7 +987,7 @@ def shared_aggregate_value(text: str, rests: Memo) -> tuple:
     """
     if text[1] == "[":
         cut = text.find("]")
-        if text.startswith("],[", cut):
+        if text.startswith("],[", cut) or _NEXT_GROUP.match(text, cut):
             rest = text[cut + 1:]
             items = rests.get(rest)
             if items is None:

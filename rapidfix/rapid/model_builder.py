@@ -407,10 +407,10 @@ class ModelBuilder:
 
     def _named_call_fields(self, expr: s.LazyFunctionCall, type_hint: str | None, module: str,
                            routine: str | None) -> tuple | None:
-        """_operand_fields of a function call of a data name and literals (see
-        Evaluator.named_call), or of such a call and literals (`Offs(RelTool(p,0,0,5),
-        0,0,10)`), or None for any other call. A name is looked up once, for its value
-        and its declaration."""
+        """_operand_fields of a function call of a data name (or an inline value) and
+        literals (see Evaluator.named_call), or of such a call and literals
+        (`Offs(RelTool(p,0,0,5),0,0,10)`), or None for any other call. A name is looked
+        up once, for its value and its declaration."""
         head = expr.head
         if head is None or not self.settled:
             return None
@@ -453,9 +453,12 @@ class ModelBuilder:
     def _first_value(self, expr: s.Expr | None, module: str, routine: str | None,
                      depth: int) -> tuple[object, Declaration | None] | None:
         """(value or NotConstant, declaration or None) of a call's first argument when it
-        is a data name or a call read in one step (`_nested_value`), else None."""
+        is a data name, an inline value read already (`Offs([[x,y,z],...],0,0,5)`) or a
+        call read in one step (`_nested_value`), else None."""
         if type(expr) is s.NameRef:
             return self._name_value(expr, module, routine)
+        if type(expr) is s.NumericAggregate:
+            return expr.value, None
         if type(expr) is s.LazyFunctionCall:
             value = self._nested_value(expr, module, routine, depth)
             return None if value is None else (value, None)

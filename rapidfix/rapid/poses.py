@@ -119,8 +119,29 @@ def reltool(target: Value, dx: float, dy: float, dz: float,
     moved = (trans[0] + shift[0], trans[1] + shift[1], trans[2] + shift[2])
     if rx == ry == rz == 0.0:
         return (moved, _positive(unit), conf, extax)
+    return (moved, _turned(rot, unit, rx, ry, rz), conf, extax)
+
+
+# (id of a shared orientation tuple, rx, ry, rz) -> (the tuple, its RelTool turn): a
+# program turns many targets of one orientation by the same angles (`\Rz:=90`)
+_TURNED: dict[tuple, tuple[tuple, Quat]] = {}
+
+
+def _turned(rot: tuple, unit: Quat, rx: float, ry: float, rz: float) -> Quat:
+    """The orientation `rot` (unit quaternion `unit`) turned by RelTool's angles (deg)."""
+    # -0.0 equals 0.0 as a key, but its turn may differ in the sign of a zero: not kept
+    kept = all(a != 0.0 or math.copysign(1.0, a) > 0 for a in (rx, ry, rz))
+    key = (id(rot), rx, ry, rz)
+    known = _TURNED.get(key) if kept else None
+    if known is not None and known[0] is rot:
+        return known[1]
     turn = _mul(_mul(_about(1, rx), _about(2, ry)), _about(3, rz))
-    return (moved, _positive(_unit(_mul(unit, turn))), conf, extax)
+    turned = _positive(_unit(_mul(unit, turn)))
+    if kept:
+        if len(_TURNED) >= 4096:
+            _TURNED.clear()
+        _TURNED[key] = (rot, turned)
+    return turned
 
 
 def orient_zyx(ez: float, ey: float, ex: float) -> Quat:

@@ -34,6 +34,8 @@ from rapidfix.rapid.transform import numeric_aggregate_value
 
 UNUSED = "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]"
 TARGET = f"[[1,-2.5,3E2],[1,0,0,0],[0,-1,2,0],{UNUSED}]"
+# as many programs are written by hand: whitespace after the commas, groups on their lines
+SPACED = TARGET.replace(",", ", ").replace("], [", "],\n\t[", 1)
 
 
 def shape(node: object) -> object:
@@ -391,7 +393,10 @@ def test_a_grouped_value_reads_the_rest_once():
                      (9e9,) * 6)
     assert second[0] == (4.0, 5.0, 6.0) and second[1] is first[1] and second[3] is first[3]
     assert grouped_value("[[1,2],3]", rests) is None  # not a group after the first
-    assert grouped_value("[[1, 2], [3]]", rests) is None  # whitespace between the groups
+    # whitespace between the groups: read too, the rest once per distinct text
+    spaced = grouped_value("[[1, 2],\n\t[3]]", rests)
+    assert spaced == ((1.0, 2.0), (3.0,)) == numeric_aggregate_value("[[1, 2],\n\t[3]]")
+    assert grouped_value("[[5, 6],\n\t[3]]", rests)[1] is spaced[1]
     with pytest.raises(NotFast):
         grouped_value("[[1-1,2],[3]]", rests)
 
@@ -451,6 +456,8 @@ PIECES = [
     "WaitTime \\InPos, 0.5;",
     "Foo \\A;",
     "Foo \\A:=f(1,2) , x.y;",
+    f"MoveL {SPACED}, v100, z1, tool0;",
+    "Foo [[1, 2] , [3]], [[1,\x1a2], [3]], [[1 -1, 2], [3]], [[ 1 ,2 ],\r\n[3 ]];",
 ]
 DATA = [
     f"CONST robtarget p:={TARGET};",
@@ -461,6 +468,10 @@ DATA = [
     f"CONST robtarget path{{2}}:=[{TARGET},\n {TARGET}];",
     "VAR num b{2,3}:=[[1,2,3],[4,5,6]];",
     "CONST num q:=[1,2.3.4];",
+    f"CONST robtarget s := {SPACED};",
+    "VAR num c{2,2}:=[[1, 2],\n [3, 4]];",
+    "VAR num d{2,2}:=[[1 -1, 2], [3, 4]];",
+    "VAR num e{2,2}:=[[1,\x1a2], [3, 4]];",
 ]
 GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]
 

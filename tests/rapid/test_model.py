@@ -239,6 +239,25 @@ def test_reltool_against_quaternion_algebra(rot, d, angles):
     assert target.data.rot[0] >= 0
 
 
+def test_reltool_turns_kept_per_orientation_equal_fresh_ones_to_the_bit():
+    from rapidfix.rapid import poses
+
+    rot = (0.0, 0.258819045, 0.965925826, 0.0)
+    other = (0.5, 0.5, 0.5, 0.5)
+    angles = [(0.0, 0.0, 90.0), (-0.0, 0.0, 90.0), (0.0, -0.0, 90.0), (30.0, -45.0, 60.0),
+              (0.0, 0.0, 90.0), (-0.0, 0.0, 90.0)]
+    cases = [(((1.0, 2.0, 3.0), r, (0.0, 0.0, 0.0, 0.0), (9e9,) * 6), a)
+             for r in (rot, other, rot) for a in angles]
+    poses._TURNED.clear()
+    kept = [poses.reltool(target, 1.0, -2.0, 3.0, *a) for target, a in cases]
+    assert len(poses._TURNED) == 4  # two turns per orientation: none with a -0.0
+    fresh = []
+    for target, a in cases:
+        poses._TURNED.clear()
+        fresh.append(poses.reltool(target, 1.0, -2.0, 3.0, *a))
+    assert repr(kept) == repr(fresh)  # the sign of every zero too
+
+
 def test_reltool_of_offs_nested():
     program = parse_program(module(
         f"CONST robtarget p := [[0,0,0],[0,0,1,0],[0,0,0,0],{UNUSED}];",
