@@ -247,6 +247,14 @@ def test_function_calls_of_a_name_read_in_one_step_give_the_general_model():
     MoveL p1,v100,z1,gun\\WObj:=Pick(p1,1);
     MoveL RelTool(p1,0,0,1\\Rx:=1.5\\Ry:=-2),v100,z1,gun;
     MoveL RelTool(p1,0,0,1\\Rz),v100,z1,gun;
+    MoveL Offs({TARGET},0,0,1),v100,z1,gun;
+    MoveL RelTool({TARGET},0,0,1\\Rx:=1.5\\Rz:=90),v100,z1,gun;
+    MoveL Offs([[1,2,3],[0,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],0,0,1),
+      v100,z1,gun;
+    MoveL RelTool([[1,2,3],[0,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]],0,0,1),
+      v100,z1,gun;
+    MoveL Offs([1,2,3],0,0,1),v100,z1,gun;
+    MoveL Offs(RelTool({TARGET},0,0,1),0,0,2),v100,z1,gun;
     FOR i FROM 1 TO 2 DO
       MoveL Offs(i,0,0,1),v100,z1,gun;
     ENDFOR
