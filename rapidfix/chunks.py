@@ -24,3 +24,6 @@ PREDICT = 4096
 #: segments per call of the line bound (postprocess/refinement.py): its temporaries take
 #: about 0.5 KB a segment, which a million-line program would hold all at once
 LINE_BOUND = 8192
+#: targets per pass of naming the confdata that do reach a target (postprocess/plan.py):
+#: every branch and turn of each is solved and classified, about 10 KB a target
+EXPLAIN_CONF = 2048

@@ -92,15 +92,18 @@ def skipped_lines(skipped: list[Skipped], every: bool = False) -> list[str]:
     """The lines listing skipped moves, reasons in the command's words: every one, or past
     SKIP_LIST_LIMIT the first SKIP_LIST_HEAD and a count per kind of reason for the rest,
     most frequent first."""
-    worded = [replace(move, reason=in_cli_words(move.reason)) for move in skipped]
-    if every or len(worded) <= SKIP_LIST_LIMIT:
-        return [str(move) for move in worded]
+    if every or len(skipped) <= SKIP_LIST_LIMIT:
+        return [str(replace(move, reason=in_cli_words(move.reason))) for move in skipped]
     rest: dict[str, int] = {}
-    for move in worded[SKIP_LIST_HEAD:]:
-        kind = reason_kind(move.reason)
+    kinds: dict[str, str] = {}  # a reason -> its kind (many moves share their reason)
+    for move in skipped[SKIP_LIST_HEAD:]:
+        kind = kinds.get(move.reason)
+        if kind is None:
+            kind = kinds[move.reason] = reason_kind(in_cli_words(move.reason))
         rest[kind] = rest.get(kind, 0) + 1
     counted = sorted(rest.items(), key=lambda item: -item[1])
-    return [*map(str, worded[:SKIP_LIST_HEAD]),
+    head = skipped[:SKIP_LIST_HEAD]
+    return [*(str(replace(move, reason=in_cli_words(move.reason))) for move in head),
             f"{len(skipped) - SKIP_LIST_HEAD:,} more moves left as they were, not listed "
             "(--all-skipped lists them):",
             *(f"  {count:,} × {kind}" for kind, count in counted)]

@@ -82,6 +82,27 @@ def confdata(model: RobotModel, q: np.ndarray) -> np.ndarray:
     return out[0] if single else out
 
 
+def slot_confdata(model: RobotModel, sols: IKSolutions) -> np.ndarray:
+    """confdata (N, S, 4) int of every valid slot of `sols` (0 in the others).
+
+    The geometry behind cfx is worked out once per branch, not per slot: a slot differs
+    from its branch by whole turns, which move no part of the arm; cf1, cf4, cf6 and the
+    θ5 bit are read from the slot's own angles."""
+    valid = sols.valid
+    n, slots = valid.shape
+    found = np.zeros((n, slots, 4), dtype=int)
+    if not valid.any():
+        return found
+    k = conf_quantities(model, sols.base_q)  # (N, 8, 6)
+    per_branch = slots // 8
+    q = sols.q[valid]
+    ahead = np.repeat(k[..., 3], per_branch, axis=1)[valid]
+    side = np.repeat(k[..., 4], per_branch, axis=1)[valid]
+    found[valid, :3] = np.floor(q[:, [0, 3, 5]] / QUADRANT).astype(int)
+    found[valid, 3] = 4 * (ahead < 0) + 2 * (side < 0) + (q[:, 4] < 0)
+    return found
+
+
 def conf_matches(
     model: RobotModel, q: np.ndarray, conf: np.ndarray, tol: float = CONF_TOL,
     tol_mm: float = CONF_TOL_MM,

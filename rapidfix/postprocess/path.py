@@ -292,6 +292,30 @@ def interval_deviation(
     return dev
 
 
+#: rounds in a row in which a segment's worst piece has not fallen below STALL_RATIO of
+#: the round before, after which the segment is given up: split into k ≥ 2 pieces, a
+#: chord's deviation falls with 1/k², so a piece that does not holds a jump of the joint
+#: path (a wrist or branch flip between its knots), which no number of points closes
+STALL_ROUNDS = 2
+STALL_RATIO = 0.5
+
+
+def _stalled(seg: np.ndarray, dev: np.ndarray, worst: np.ndarray,
+             stalled: np.ndarray) -> np.ndarray:
+    """Segments whose worst piece (`dev` over their pieces `seg` still too far) has not
+    fallen below STALL_RATIO × `worst` for STALL_ROUNDS rounds; updates `worst` and
+    `stalled`."""
+    now = np.zeros(worst.shape[0])
+    np.maximum.at(now, seg, dev)
+    rows = np.unique(seg)
+    same = now[rows] > STALL_RATIO * worst[rows]
+    stalled[rows] = np.where(same, stalled[rows] + 1, 0)
+    worst[rows] = now[rows]
+    given_up = np.zeros(worst.shape[0], dtype=bool)
+    given_up[rows[stalled[rows] >= STALL_ROUNDS]] = True
+    return given_up
+
+
 def refine(
     curves: Curves, q_ideal: tuple[np.ndarray, np.ndarray], q_cmd: tuple[np.ndarray, np.ndarray],
     tolerance: float, predict: Predict, solve: Solve, bound: np.ndarray | None = None,
@@ -317,11 +341,16 @@ def refine(
         deviation[settled] = np.asarray(bound, dtype=float)[settled]
         keep = ~settled
         seg, s0, s1, qi0, qi1, qc0, qc1 = (x[keep] for x in (seg, s0, s1, qi0, qi1, qc0, qc1))
+    worst = np.full(m, np.inf)  # per segment: its worst piece in the round before
+    stalled = np.zeros(m, dtype=int)  # rounds in a row its worst piece has not improved
     for _ in range(MAX_ROUNDS):
         if seg.size == 0:
             break
         dev = interval_deviation(curves, seg, qc0, qc1, predict, SCREEN * tolerance)
         bad = (dev > target) & ~failed[seg]
+        if bad.any():
+            failed |= _stalled(seg[bad], dev[bad], worst, stalled)
+            bad &= ~failed[seg]
         np.maximum.at(deviation, seg[~bad], dev[~bad])
         if not bad.any():
             break

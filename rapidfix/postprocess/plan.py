@@ -14,9 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.error_model import Context, ErrorModel, solve_compensation
 from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import IKStatus, RobotModel
+from rapidfix.kinematics.confdata import slot_confdata
 from rapidfix.postprocess.placement import Placement
 
 REASONS = {
@@ -79,33 +81,38 @@ def _explain_conf(robot: RobotModel, flange: np.ndarray, conf: np.ndarray, statu
     """Name the confdata that do reach a target whose own confdata names no solution:
     the `shown` nearest to its own (sum of absolute differences; ties in confdata order).
 
-    Vectorised over the failing targets: a program written in the wrong work object can
-    fail on every move."""
-    rows = np.flatnonzero(status == IKStatus.NO_MATCHING_CONF)
-    if rows.size == 0:
-        return
+    Vectorised over the failing targets, a chunk at a time: a program written in the
+    wrong work object can fail on every move, and each has up to 8 branches × turns."""
+    failing = np.flatnonzero(status == IKStatus.NO_MATCHING_CONF)
+    for start in range(0, failing.size, chunks.EXPLAIN_CONF):
+        _explain_rows(robot, flange, conf, failing[start:start + chunks.EXPLAIN_CONF],
+                      reason, shown)
+
+
+def _explain_rows(robot: RobotModel, flange: np.ndarray, conf: np.ndarray, rows: np.ndarray,
+                  reason: np.ndarray, shown: int) -> None:
+    """`_explain_conf` of the failing targets `rows`."""
     sols = robot.ik(flange[rows])
     valid = sols.valid
-    found = np.zeros((*valid.shape, 4), dtype=int)
-    if valid.any():
-        found[valid] = robot.confdata(sols.q[valid])
+    found = slot_confdata(robot, sols)
     dist = np.abs(found - conf[rows][:, None, :]).sum(axis=2)
     # sort each row's slots by (invalid last, distance, confdata): the same order as the
     # distinct confdata sorted, then stably by distance
     keys = (found[..., 3], found[..., 2], found[..., 1], found[..., 0], dist, ~valid)
     order = np.lexsort(keys, axis=-1)
-    ranked = np.take_along_axis(found, order[..., None], axis=1).tolist()
-    ok = np.take_along_axis(valid, order, axis=1).tolist()
-    for row, slots, good, own in zip(rows.tolist(), ranked, ok, conf[rows].tolist()):
-        options: list[list[int]] = []
-        for slot, usable in zip(slots, good):
-            if not usable or len(options) == shown:
-                break
-            if not options or slot != options[-1]:
-                options.append(slot)
-        if options:
+    ranked = np.take_along_axis(found, order[..., None], axis=1)
+    # the first `shown` usable slots of each row, each unlike the one before it
+    fresh = np.take_along_axis(valid, order, axis=1)
+    fresh[:, 1:] &= np.any(ranked[:, 1:] != ranked[:, :-1], axis=2)
+    picked = fresh & (np.cumsum(fresh, axis=1) <= shown)
+    options = ranked[picked].tolist()  # row by row, in rank order
+    ends = np.cumsum(picked.sum(axis=1)).tolist()
+    begin = 0
+    for row, end, own in zip(rows.tolist(), ends, conf[rows].tolist()):
+        if end > begin:
             reason[row] = (f"no solution on the branch its confdata {own} names "
-                           f"(it is reachable with {', '.join(map(str, options))})")
+                           f"(it is reachable with {', '.join(map(str, options[begin:end]))})")
+        begin = end
 
 
 @dataclass(frozen=True)

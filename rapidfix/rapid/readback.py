@@ -132,12 +132,24 @@ class BulkProgram:
     def arguments(self, i: int) -> tuple[tuple[str, ...], dict[str, str | None]]:
         """Call i's required values as written, in order, and its optional arguments
         (lower-case name -> value text or None). A CAM program's calls share a few
-        dozen texts after their first value: each is read once."""
+        dozen texts after their first value: each is read once. Calls of two targets
+        (`MoveC p1,p2,...`) share theirs after the second: a text after the first value
+        that starts with a value is read as that value and the text after it."""
         _name, first, rest = self.calls[i]
-        parsed = self._tails.get(rest)
+        tails = self._tails
+        parsed = tails.get(rest)
         if parsed is None:
-            parsed = _tail_arguments(rest)
-            self._tails.keep(rest, parsed)
+            head = CALL_PIECE.compiled.search(rest)
+            if head is not None and head.group(4) is not None:
+                after = rest[head.end():]
+                later = tails.get(after)
+                if later is None:
+                    later = _tail_arguments(after)
+                    tails.keep(after, later)
+                parsed = ((head.group(4), *later[0]), later[1])
+            else:
+                parsed = _tail_arguments(rest)
+            tails.keep(rest, parsed)
         return ((first, *parsed[0]) if first else parsed[0]), parsed[1]
 
     def visible(self, module: str, routine: str) -> tuple[dict, dict]:

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics import IKStatus, available_robots, load_robot
-from rapidfix.kinematics.confdata import confdata, nearest_chain
+from rapidfix.kinematics.confdata import confdata, nearest_chain, slot_confdata
 
 pytestmark = pytest.mark.filterwarnings("error")
 
@@ -54,6 +54,20 @@ def test_confdata_round_trip_selects_the_source_joints(name):
     q_sel, status = robot.ik_conf(robot.fk(q), conf)
     assert (status == IKStatus.OK).all()
     assert np.abs(q_sel - q).max() < 1e-8
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_every_slot_has_the_confdata_of_its_own_joints(name):
+    """slot_confdata (the cfx geometry once per branch, turns added) against confdata of
+    each valid slot's joints on their own."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(31)
+    q = rng.uniform(robot.limits[:, 0], robot.limits[:, 1], (500, 6))
+    sols = robot.ik(robot.fk(q))
+    found = slot_confdata(robot, sols)
+    assert sols.valid.sum() > 500 and found.shape == (*sols.valid.shape, 4)
+    assert np.array_equal(found[sols.valid], confdata(robot, sols.q[sols.valid]))
+    assert not found[~sols.valid].any()
 
 
 @settings(max_examples=30, deadline=None)

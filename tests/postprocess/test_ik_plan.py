@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def test_ik_on_conf_gives_the_first_matching_slot_of_the_expanded_solutions(cell):
@@ -73,12 +74,18 @@ def test_the_kernels_are_chosen_by_the_moves_an_arc_counting_four():
     assert kernel_work(parse_program(text, "arcs.mod")) == 3 + 4 * 3
 
 
-def test_a_target_on_a_wrong_branch_names_the_nearest_confdata_that_reach_it(cell):
+@pytest.mark.parametrize("chunk", [64, 2048])
+def test_a_target_on_a_wrong_branch_names_the_nearest_confdata_that_reach_it(
+        cell, chunk, monkeypatch):
     """The reason names, per target, the three nearest distinct confdata among the valid
     solutions (distance: sum of absolute differences; ties in confdata order). Reference:
-    each target on its own, np.unique then a stable sort, as the rule reads."""
+    each target on its own, np.unique then a stable sort, as the rule reads; in one
+    pass and in chunks."""
+    from rapidfix import chunks
     from rapidfix.kinematics import IKStatus
     from rapidfix.postprocess.plan import _explain_conf
+
+    monkeypatch.setattr(chunks, "EXPLAIN_CONF", chunk)
 
     robot = cell["robot"]
     rng = np.random.default_rng(21)

@@ -215,3 +215,52 @@ def test_wrist_levers_bound_the_distance_from_every_wrist_axis_on_every_robot():
             along = np.sum(rel * dirs[:, axis], axis=1)[:, None] * dirs[:, axis]
             distance = np.linalg.norm(rel - along, axis=1)
             assert np.all(distance <= lever + gap + 1e-9), (name, axis)
+
+
+def _bowed_lines(jump: np.ndarray):
+    """Straight lines x 0 → 100 mm and a joint model whose joint-linear moves bow off
+    them (a parabola, which points close), plus, on the segments `jump`, a branch flip
+    half way: joint 3 goes 0 → 1 there, and a joint-linear move across the flip swings
+    10 mm off the line however short it is."""
+    m = jump.shape[0]
+    start, end = np.tile(np.eye(4), (m, 1, 1)), np.tile(np.eye(4), (m, 1, 1))
+    end[:, 0, 3] = 100.0
+    curves = Curves(start, end, np.zeros((m, 3)), np.zeros(m, dtype=bool))
+
+    def predict(seg, q):
+        y = 50.0 * (q[:, 0] - q[:, 0] ** 2) + 20.0 * q[:, 1] + 10.0 * np.sin(np.pi * q[:, 2])
+        return np.stack([100.0 * q[:, 0], y, np.zeros(len(q))], axis=1)
+
+    def joints(seg, s):  # on the line: the bow cancelled by joint 2, the flip on joint 3
+        q = np.zeros((len(s), 6))
+        q[:, 0], q[:, 1] = s, -2.5 * (s - s**2)
+        q[:, 2] = np.where(jump[seg] & (s >= 0.5), 1.0, 0.0)
+        return q
+
+    calls = []
+
+    def solve(seg, poses, seed):
+        calls.append(np.unique(seg))
+        q = joints(seg, poses[:, 0, 3] / 100.0)
+        return q, q, np.ones(len(seg), dtype=bool)
+
+    ends = (joints(np.arange(m), np.zeros(m)), joints(np.arange(m), np.ones(m)))
+    return curves, ends, predict, solve, calls
+
+
+def test_a_segment_whose_worst_piece_stops_improving_is_given_up_early():
+    from rapidfix.postprocess import path
+
+    jump = np.array([False, True, False, True])
+    curves, ends, predict, solve, calls = _bowed_lines(jump)
+    r = path.refine(curves, ends, ends, 0.1, predict, solve)
+    # the smooth lines close within the tolerance; the flips cannot and are given up
+    assert r.failed.tolist() == jump.tolist()
+    assert np.all(r.deviation[~jump] <= 0.1) and set(r.seg.tolist()) == {0, 2}
+    # after STALL_ROUNDS rounds without a better worst piece, not after MAX_ROUNDS
+    rounds = sum(1 for c in calls if np.isin(c, np.flatnonzero(jump)).any())
+    assert rounds <= path.STALL_ROUNDS + 2 < path.MAX_ROUNDS
+    # the smooth lines' points are those a run without the flips gives
+    curves2, ends2, predict2, solve2, _ = _bowed_lines(np.zeros(2, dtype=bool))
+    r2 = path.refine(curves2, ends2, ends2, 0.1, predict2, solve2)
+    assert np.array_equal(r.s[r.seg == 0], r2.s[r2.seg == 0])

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from rapidfix.exceptions import RapidSemanticError
 from rapidfix.postprocess import emission as emission_module
@@ -142,6 +144,30 @@ def test_the_bulk_reader_reads_scopes_and_arguments():
     assert [bulk.scope(i) for i in range(3)] == [("m", "p"), ("m", "p"), ("m", "q")]
     assert bulk.lookup("m", "p", "J")[1] == "[[6,5,4,3,2,1],[0,0,0,0,0,0]]"
     assert bulk.lookup("m", "q", "j")[1].startswith("[[1,2,3")
+
+
+_ARGUMENTS = ["p1", "p2", "[[1,2,3],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]", "v100", "z1",
+              "tool0", "\\WObj:=w", "\\Conc", "\\V:=120", "-1", "fine"]
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.sampled_from(["MoveC", "MoveL", "Foo"]),
+                          st.lists(st.sampled_from(_ARGUMENTS), min_size=1, max_size=6),
+                          st.sampled_from([",", ", ", " ,\n  ", ",! c\n"])),
+                min_size=1, max_size=12))
+def test_the_bulk_reader_splits_every_call_as_read_whole(calls):
+    """Call arguments read through the shared texts after the first and the second value
+    are those of the text after the first value read whole."""
+    from rapidfix.rapid.readback import _tail_arguments
+
+    lines = [f"  {name} {sep.join(args)};" for name, args, sep in calls]
+    bulk = read_bulk("MODULE m\nPROC p()\n" + "\n".join(lines) + "\nENDPROC\nENDMODULE\n")
+    if bulk is None:  # a call the grammar refuses (a switch after a value, ...)
+        return
+    for _ in range(2):  # read again: now from what was kept
+        for i, (_name, first, rest) in enumerate(bulk.calls):
+            required, optional = _tail_arguments(rest)
+            assert bulk.arguments(i) == (((first, *required) if first else required), optional)
 
 
 def test_a_rewritten_part_that_does_not_parse_stops_the_rewrite(monkeypatch, comp, tmp_path):
