@@ -17,7 +17,7 @@ from rapidfix import chunks
 from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.batches import as_joint_batch, frozen
 from rapidfix.kinematics.confdata import confdata as confdata_of
-from rapidfix.kinematics.confdata import select_by_conf, select_nearest
+from rapidfix.kinematics.confdata import select_by_conf, select_nearest, slot_confdata
 from rapidfix.kinematics.frames import Tool, WorkObject, tcp_pose
 from rapidfix.kinematics.ik import WRIST_TOL, solve_all
 from rapidfix.kinematics.ik_result import IKSolutions
@@ -188,6 +188,10 @@ class RobotModel:
     def confdata(self, q: np.ndarray) -> np.ndarray:
         """ABB confdata [cf1, cf4, cf6, cfx] (N, 4) int of joints q (N, 6) rad."""
         return confdata_of(self, q)
+
+    def slot_confdata(self, sols: IKSolutions) -> np.ndarray:
+        """confdata (N, S, 4) int of every valid slot of IK solutions (0 in the others)."""
+        return slot_confdata(self, sols)
 
 
 def _in_chunks(T: np.ndarray, per_row: np.ndarray,

@@ -18,7 +18,6 @@ from rapidfix import chunks
 from rapidfix.error_model import Context, ErrorModel, solve_compensation
 from rapidfix.exceptions import ModelError
 from rapidfix.kinematics import IKStatus, RobotModel
-from rapidfix.kinematics.confdata import slot_confdata
 from rapidfix.postprocess.placement import Placement
 
 REASONS = {
@@ -94,7 +93,7 @@ def _explain_rows(robot: RobotModel, flange: np.ndarray, conf: np.ndarray, rows:
     """`_explain_conf` of the failing targets `rows`."""
     sols = robot.ik(flange[rows])
     valid = sols.valid
-    found = slot_confdata(robot, sols)
+    found = robot.slot_confdata(sols)
     dist = np.abs(found - conf[rows][:, None, :]).sum(axis=2)
     # sort each row's slots by (invalid last, distance, confdata): the same order as the
     # distinct confdata sorted, then stably by distance

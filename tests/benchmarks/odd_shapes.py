@@ -31,6 +31,10 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 - concurrent:  a handling cell: switches before the target (`MoveJ \\Conc, p1, ...`,
                `MoveL \\Conc, Offs(p1,0,0,50), ...`), some with `\\ID`, and
                `WaitTime \\InPos` between the moves
+- flips:       pick and place from joint targets: `MoveAbsJ` to a jointtarget 50 mm
+               above each point, then `MoveL` down to it; every third jointtarget has
+               the wrist flipped, so the line down crosses the wrist singularity (a
+               jump no intermediate point closes)
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -49,7 +53,7 @@ from rapidfix.kinematics import load_robot
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
-              "concurrent")
+              "concurrent", "flips")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -370,13 +374,35 @@ def _concurrent(n: int) -> list[str]:
     return [*_head("Handling"), *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _flips(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    robot = load_robot(ROBOT)
+    above = np.tile(_frame((0, 0, 0), ROT), (n, 1, 1))
+    above[:, :3, 3] = cam_positions(n) + [0.0, 0.0, 50.0]
+    flange = _frame(*WOBJ) @ above @ np.linalg.inv(_frame(*TOOL))
+    q, status = robot.ik_nearest(flange, np.radians([[8, 28, 35, 20, -20, 12]]))
+    if not np.all(status == 0):  # pragma: no cover
+        raise RuntimeError("a generated target is out of reach")
+    flip = np.arange(n) % 3 == 2  # the same pose with the other wrist
+    q[flip, 3] = np.angle(np.exp(1j * (q[flip, 3] + np.pi)))
+    q[flip, 4] = -q[flip, 4]
+    q[flip, 5] = np.angle(np.exp(1j * (q[flip, 5] + np.pi)))
+    joints = [",".join(f"{v:.4f}" for v in row) for row in np.degrees(q).tolist()]
+    decls = [f"  CONST jointtarget jAbove{k}:=[[{joints[k]}],[{EXTAX}]];" for k in range(n)]
+    moves = []
+    for k in range(n):
+        moves += [f"    MoveAbsJ jAbove{k}\\NoEOffs,v1000,z50,tMill\\WObj:=wPlate;",
+                  f"    MoveL p{k},v200,fine,tMill\\WObj:=wPlate;"]
+    return [*_head("Flips"), *decls, *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
              "records": _records, "messages": _messages, "conditions": _conditions,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
              "remarks": _remarks, "spaced": _spaced,
-             "latin1": _latin1, "concurrent": _concurrent}
+             "latin1": _latin1, "concurrent": _concurrent, "flips": _flips}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
