@@ -20,8 +20,9 @@ timed steps for both trees, and checks that both wrote the same bytes. The sets:
   the path check and the emission.
 - odd: the odd shapes slowest per line at 100,000 lines (arithmetic in the robtargets,
   records in Offs arguments, statements stacked on IF lines, a distinct argument tail
-  per move, conditions, switches before the target); timed the parse, the plan and the
-  emission.
+  per move, conditions, switches before the target, whitespace inside the targets,
+  targets that fail their confdata) and `flips` at 30,000 (lines the path check cannot
+  close); timed the parse, the plan and the emission.
 """
 
 from __future__ import annotations
@@ -70,6 +71,9 @@ CASES = {
         ("tails 100k", "tails", 100_000, True, "jointtargets"),
         ("conditions 100k", "conditions", 100_000, True, "jointtargets"),
         ("concurrent 100k", "concurrent", 100_000, True, "jointtargets"),
+        ("spaced 100k", "spaced", 100_000, True, "jointtargets"),
+        ("failing 100k", "failing", 100_000, True, "jointtargets"),
+        ("flips 30k", "flips", 30_000, True, "jointtargets"),
     ),
 }
 # what the child process times (CPU seconds, summed over calls), per set

@@ -32,9 +32,10 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                `MoveL \\Conc, Offs(p1,0,0,50), ...`), some with `\\ID`, and
                `WaitTime \\InPos` between the moves
 - flips:       pick and place from joint targets: `MoveAbsJ` to a jointtarget 50 mm
-               above each point, then `MoveL` down to it; every third jointtarget has
-               the wrist flipped, so the line down crosses the wrist singularity (a
-               jump no intermediate point closes)
+               above each point, then `MoveL` down to it. Each line starts where the
+               MoveAbsJ (written as it is) leaves the robot, off the intended start;
+               every third jointtarget has the wrist flipped, so its line down swings
+               through the wrist singularity: the path check's hopeless segments
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
