@@ -120,15 +120,18 @@ def window(text: str, err: UnexpectedInput) -> Window | None:
 
 def _took_keyword(err: UnexpectedInput, text: str, at: int) -> bool:
     """Whether the parser took the text at offset `at` as the first keyword of a module
-    item: it holds the keyword unreduced, or a completed item (after its LOCAL or TASK)
-    that starts there. A `VAR` at the start of a line inside a declaration's value, read
-    as a name, is no cut."""
+    item: it holds the keyword unreduced (alone, or in a procedure's fast head), or a
+    completed item (after its LOCAL or TASK) that starts there. A `VAR` at the start of
+    a line inside a declaration's value, read as a name, is no cut."""
     interactive = getattr(err, "interactive_parser", None)
     if interactive is None:
         return False
     for value in interactive.parser_state.value_stack:
         if isinstance(value, Token):
             if value.start_pos == at and value.type == value.upper():
+                return True
+            # the fast parser's head of a procedure, `LOCAL PROC name()` in one token
+            if value.type == "FAST_PROC" and value.start_pos <= at < value.end_pos:
                 return True
             continue
         # a run of items (a star of the grammar, a run of fast declarations): its last

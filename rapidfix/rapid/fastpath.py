@@ -213,6 +213,9 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
                 + ("" if groups else f"(?={keyword('CASE|DEFAULT|ENDTEST')})"),
         "case": rf"(?i:CASE){_WORD_END}{c}:",
         "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
+        # a procedure without parameters, up to its body (`LOCAL PROC Path_10()`)
+        "proc": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:PROC){_WORD_END}"
+                 rf"{WS}*{name}{WS}*\({WS}*\)"),
     }
 
 
@@ -232,6 +235,8 @@ _HEAD_RULES = {
     "case": ("case_clause", "_statement* -> fast_case_clause",
              'case_clause: CASE expr ("," expr)* ":"'),
     "return": ("return_stmt", "-> fast_return_stmt", "return_stmt: RETURN expr? SEMI"),
+    "proc": ("proc", "_body handler* ENDPROC -> fast_proc",
+             'proc: LOCAL? PROC NAME "(" parameters? ")"'),
 }
 _BODY_RULE = "_body: (data_decl | _statement)*"
 #: statements in one fast token at most. Python's regular expression engine keeps a
@@ -1110,6 +1115,14 @@ class FastSyntaxBuilder(SyntaxBuilder):
     def fast_return_stmt(self, head: Token) -> s.Return:
         (value,) = _head_parts(head, "return")
         return s.Return(head.start_pos, head.end_pos, value)
+
+    def fast_proc(self, head: Token, *rest: Any) -> s.Routine:
+        # the plain rule's tokens, at the head's start: LOCAL? PROC NAME (no parameters)
+        local, name = _head_splitters()["proc"].fullmatch(str(head)).groups()
+        start = head.start_pos
+        words = [Token("LOCAL", local, start_pos=start)] if local else []
+        words += [Token("PROC", "PROC", start_pos=start), Token("NAME", name)]
+        return self._routine("PROC", (*words, *rest))
 
 
 @functools.lru_cache(maxsize=1)

@@ -575,9 +575,10 @@ class ModelBuilder:
     def _shared_tail(self, call: s.LazyCall, spec: MotionSpec, layout: _Layout,
                      arguments: dict[str, Operand], optional: dict[str, Operand]
                      ) -> _SharedTail | None:
-        """What every call with this call's tail (in the same routine) shares, when its
-        leading arguments are its only targets: the same text in the same scope gives
-        the same operands (data names, switches, `\\V:=120`, any expression)."""
+        """What every call with this call's tail (in the same routine, or in any routine
+        that declares nothing) shares, when its leading arguments are its only targets:
+        the same text in the same scope gives the same operands (data names, switches,
+        `\\V:=120`, any expression)."""
         n_heads = len(call.heads)
         if not n_heads or len(layout) < n_heads or any(
                 layout[i][0] not in spec.target_keys for i in range(n_heads)):
@@ -619,8 +620,9 @@ class ModelBuilder:
         """The MotionInstructions of the calls found in pass 2, in program order.
 
         This runs once per move of a program, so it is written as one loop with
-        its tables in local variables. A LazyCall's tail is read once per routine
-        (`_SharedTail`); its moves then only need their first argument's operand.
+        its tables in local variables. A LazyCall's tail is read once per routine, or
+        once for all routines that declare nothing (`_SharedTail`); its moves then only
+        need their first argument's operand.
         """
         source, module_names, operands = self.source, self.module_names_as_spelt, self._operands
         name_ref, operand, lazy_call, role_types = s.NameRef, Operand, s.LazyCall, _ROLE_TYPES
@@ -642,6 +644,12 @@ class ModelBuilder:
                 spec = spec.for_call(sum(a.kind == "required" for a in call.args))
             if spec is not last[0] or routine is not last[1] or module is not last[2]:
                 rkey = routine.lower()
+                # the scopes _find looks a name up in, innermost first
+                routine_scope = self.routine_names.get((module, rkey), _NONE)
+                if not routine_scope:  # a routine that declares nothing (no parameters,
+                    # data or FOR variables) sees its module's names: its moves share
+                    # operands and tails with those of every such routine
+                    rkey = ""
                 found = layouts.get((spec, module, rkey))
                 if found is None:
                     found = layouts[(spec, module, rkey)] = (tuple(
@@ -651,8 +659,6 @@ class ModelBuilder:
                 layout, shared_tails = found
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
-                # the scopes _find looks a name up in, innermost first
-                routine_scope = self.routine_names.get((module, rkey), _NONE)
                 module_scope = self.module_names.get(module, _NONE)
                 module_name = module_names[module]
             if type(call) is lazy_call:

@@ -376,10 +376,9 @@ def _concurrent(n: int) -> list[str]:
 
 
 def _flips(n: int) -> list[str]:
-    trans, confs = _targets(n)
     robot = load_robot(ROBOT)
     above = np.tile(_frame((0, 0, 0), ROT), (n, 1, 1))
-    above[:, :3, 3] = cam_positions(n) + [0.0, 0.0, 50.0]
+    above[:, :3, 3] = cam_positions(n) + np.array([0.0, 0.0, 50.0])
     flange = _frame(*WOBJ) @ above @ np.linalg.inv(_frame(*TOOL))
     q, status = robot.ik_nearest(flange, np.radians([[8, 28, 35, 20, -20, 12]]))
     if not np.all(status == 0):  # pragma: no cover

@@ -92,10 +92,14 @@ def test_the_error_window_says_what_the_whole_text_says(any_window, monkeypatch,
     assert windowed == whole
 
 
-def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch):
+@pytest.mark.parametrize("local", [False, True])
+def test_a_late_error_in_a_large_file_is_explained_from_its_routine(monkeypatch, local):
     """The plain grammar reads only the window: the items before the error's routine
-    are blank in what it is given, and the message is the whole text's."""
+    are blank in what it is given, and the message is the whole text's (the routines'
+    heads one fast token each, `LOCAL PROC Path_1()` too)."""
     text = shape_moves("named", 1500)  # three routines
+    if local:
+        text = text.replace("PROC Path_", "LOCAL PROC Path_")
     at = text.rindex("MoveL")
     text = text[:at] + "MoveL p1 v100, z1, tMill;\n    " + text[at:]
     seen, windowed, whole = _windowed_and_whole(text, monkeypatch)

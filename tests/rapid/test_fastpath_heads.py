@@ -2,6 +2,7 @@
 fast tokens (rapidfix.rapid.fastpath FAST_IF, FAST_ELSEIF, FAST_WHILE, FAST_FOR, FAST_TEST,
 FAST_CASE, FAST_RETURN): their conditions are read by fast_expressions' reader, and the
 tree must be the plain grammar's, node for node, or both routes must refuse the text.
+So must a procedure's head without parameters (FAST_PROC).
 """
 
 from __future__ import annotations
@@ -95,8 +96,8 @@ def test_heads_are_single_fast_tokens_with_the_plain_tree(condition):
 ])
 def test_heads_written_tightly_or_over_lines(text):
     assert shape(fast_parser().parse(text)) == plain_tree(text)
-    assert fast_tokens(text)[0] in ("FAST_IF", "FAST_WHILE", "FAST_FOR", "FAST_TEST",
-                                    "FAST_RETURN")
+    heads = [t for t in fast_tokens(text) if t != "FAST_PROC"]
+    assert heads[0] in ("FAST_IF", "FAST_WHILE", "FAST_FOR", "FAST_TEST", "FAST_RETURN")
 
 
 @pytest.mark.parametrize("text", [
@@ -214,3 +215,36 @@ def test_moves_inside_fast_heads_build_the_plain_model():
                       "  ENDPROC", "ENDMODULE", ""])
     program = assert_same_model(text)
     assert [m.in_loop for m in program.motions] == [False, False, True]
+
+
+PROC_BODY = ["  MoveL p1,v100,z1,tool0;", "  ERROR", "    RETURN;", "ENDPROC"]
+
+
+@pytest.mark.parametrize("head", [
+    "PROC main()", "LOCAL PROC p1()", "proc Path_10 ( )", "Local\tProc p()",
+    "PROC\n  main\n(\n)", "PROC Ñandú()", "PROC p() ! why", "PROC IF()", "PROC p(\t)",
+])
+def test_a_procedure_head_without_parameters_is_one_fast_token(head):
+    text = module(head, *PROC_BODY)
+    assert_parses_as_plain(text)
+    if "IF()" not in head:
+        assert fast_tokens(text)[0] == "FAST_PROC"
+
+
+@pytest.mark.parametrize("head", [
+    "PROC p(num a)", "PROC p(\\switch s)", "PROC p ! c\n()", "LOCAL ! c\n PROC p()",
+    "FUNC num f()", "TRAP t", "PROC p(<PAR>)", "PROC <ID>()", "LOCALPROC p()", "PROC p()()",
+    "PROC p(", "LOCAL LOCAL PROC p()",
+])
+def test_other_routine_heads_keep_the_plain_tokens(head):
+    body = PROC_BODY if "FUNC" not in head else ["  RETURN 1;", "ENDFUNC"]
+    body = ["ENDTRAP"] if "TRAP" in head else body
+    text = module(head, *body)
+    assert_parses_as_plain(text)
+
+
+def test_a_late_error_after_many_fast_procedure_heads_is_explained_as_in_full():
+    routines = [line for k in range(600) for line in
+                (f"PROC Path_{k}()", "  MoveL p1,v100,z1,tool0;", "ENDPROC")]
+    text = module(*routines[:-3], "PROC last()", "  MoveL p1 v100,z1,tool0;", "ENDPROC")
+    assert_parses_as_plain(text)

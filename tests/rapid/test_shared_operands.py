@@ -322,3 +322,42 @@ def test_forgetting_the_texts_empties_every_memo_the_fast_path_keeps():
     assert fastpath._TAILS and fastpath._ENTRIES  # tails and their values were kept
     forget_texts()
     assert not any(memos)
+
+
+def test_routines_that_declare_nothing_share_tails_and_the_others_keep_their_own():
+    """A routine without parameters, data or FOR variables sees its module's names, so
+    its moves share operands with every such routine; a routine that declares a name
+    (a parameter, a local VAR, a FOR variable, all shadowing the module's) keeps its
+    own, as the general route reads them."""
+    plain = "    MoveL p1,v100,z1,gun\\WObj:=table;\n    MoveL p2,v100,z1,gun\\WObj:=table;\n"
+    text = f"""MODULE M
+  PERS tooldata gun:={TOOL};
+  PERS wobjdata table:={WOBJ};
+  CONST robtarget p1:={TARGET};
+  CONST robtarget p2:={TARGET};
+  CONST num i:=1;
+  PROC a()
+{plain}  ENDPROC
+  PROC b(robtarget p1)
+{plain}  ENDPROC
+  PROC c()
+    VAR tooldata gun:={TOOL};
+{plain}  ENDPROC
+  PROC d()
+    FOR table FROM 1 TO 2 DO
+{plain}    ENDFOR
+  ENDPROC
+  PROC e()
+{plain}  ENDPROC
+ENDMODULE
+"""
+    program = assert_same_model(text)
+    by_routine: dict[str, set[int]] = {}
+    for motion in program.motions:  # (the first move with a tail is made in full)
+        if motion.shared is not None:
+            by_routine.setdefault(motion.routine, set()).add(id(motion.shared))
+    assert len(by_routine["e"]) == 1 and by_routine["a"] == by_routine["e"]  # one tail
+    for own in ("b", "c", "d"):
+        assert not by_routine.get(own, set()) & by_routine["a"]
+    assert not program.motions[2].targets[0].static  # b's p1 is its parameter
+    assert program.motions[4].arguments["tool"].declaration.routine == "c"  # its own gun
