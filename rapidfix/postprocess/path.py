@@ -342,7 +342,7 @@ def refine(
         keep = ~settled
         seg, s0, s1, qi0, qi1, qc0, qc1 = (x[keep] for x in (seg, s0, s1, qi0, qi1, qc0, qc1))
     worst = np.full(m, np.inf)  # per segment: its worst piece in the round before
-    stalled = np.zeros(m, dtype=int)  # rounds in a row its worst piece has not improved
+    stalled = np.zeros(m, dtype=int)  # rounds in a row its worst piece has not halved
     for _ in range(MAX_ROUNDS):
         if seg.size == 0:
             break

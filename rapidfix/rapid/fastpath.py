@@ -36,7 +36,9 @@ More terminals take the head of a compound statement whole (head_patterns):
 `CASE a, b:` and `RETURN [e];`. Their patterns only find where each condition ends (the
 fewest characters up to the next keyword, no comment, `;`, conditional or named argument
 or placeholder inside); fast_expressions' reader then reads it as rapid.lark's `expr`
-(relations, NOT, AND, OR, XOR), or gives up (NotFast).
+(relations, NOT, AND, OR, XOR), or gives up (NotFast). A procedure's head without
+parameters, `[LOCAL] PROC name()`, is one terminal too (a program of many small
+routines spent a Lark step on each of its words).
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
