@@ -15,6 +15,7 @@ routine and type, and the motions are made in one loop.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from rapidfix.rapid import syntax as s
@@ -35,6 +36,10 @@ from rapidfix.rapid.values import ValueShapeError, fits_type, typed_value
 
 #: the scope of a name that has none (no routine, or nothing declared there)
 _NONE: dict[str, object] = {}
+# a shared tail a routine takes from its module's routines (ModelBuilder._module_tail)
+_MODULE_TAIL = object()
+# what may be a name in RAPID text (rapid.lark's NAME, and digits and numbers' letters)
+_WORDS = re.compile("[A-Za-z0-9_\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff]+")
 
 # role of a required parameter -> the data type it takes
 _ROLE_TYPES = {
@@ -599,6 +604,19 @@ class ModelBuilder:
         return _SharedTail(tuple(layout[i][0] for i in range(n_heads)), spec.target_keys,
                            tuple(entries))
 
+    def _module_tail(self, call: s.LazyCall, scope: dict[str, object]) -> bool:
+        """Whether the shared part of a call (its lead and tail) names nothing its routine
+        declares (`scope`): then it means there what it means in every routine of the
+        module that declares nothing. Read from the text, every word taken for a name
+        (a word in a string too: that only shares less)."""
+        heads = call.heads
+        if not heads:
+            return False
+        text = self.source.text
+        shared = (text[call.start + len(call.name):heads[0].start]
+                  + " " + text[heads[-1].end:call.end])
+        return not any(word.lower() in scope for word in _WORDS.findall(shared))
+
     def _head_operands(self, heads: tuple[s.Argument, ...], layout: _Layout,
                        shared: _SharedTail, module: str, rkey: str) -> list[Operand]:
         """The target operands of a call's leading arguments, in the order of its
@@ -657,6 +675,17 @@ class ModelBuilder:
                          caches.setdefault((module, rkey, role_types.get(key)), {}))
                         for key in (p.lower() for p in spec.parameters)), {})
                 layout, shared_tails = found
+                # a routine that declares names shares with the module's routines the
+                # tails that hold none of them (`_module_tail`)
+                module_tails = None
+                if rkey:
+                    around = layouts.get((spec, module, ""))
+                    if around is None:
+                        around = layouts[(spec, module, "")] = (tuple(
+                            (key, role_types.get(key),
+                             caches.setdefault((module, "", role_types.get(key)), {}))
+                            for key in (p.lower() for p in spec.parameters)), {})
+                    module_tails = around[1]
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
                 module_scope = self.module_names.get(module, _NONE)
@@ -671,13 +700,19 @@ class ModelBuilder:
                     tail = (id(call.tail), 2)
                 else:
                     tail = id(call.tail)
-                shared = shared_tails.get(tail, False)
+                table = shared_tails
+                shared = table.get(tail, False)
+                if shared is _MODULE_TAIL or (shared is False and module_tails is not None
+                                              and self._module_tail(call, routine_scope)):
+                    table[tail] = _MODULE_TAIL
+                    table = module_tails
+                    shared = table.get(tail, False)
                 if type(shared) is tuple:  # the second call with this tail: share it now
-                    shared = shared_tails[tail] = self._shared_tail(*shared)
+                    shared = table[tail] = self._shared_tail(*shared)
                 if shared is False:  # the first call with this tail: made in full (a
                     # tail that never recurs, `\V:=` on every move, is not shared at all)
                     arguments, optional = operands(call, layout, module, rkey)
-                    shared_tails[tail] = (call, spec, layout, arguments, optional)
+                    table[tail] = (call, spec, layout, arguments, optional)
                     shared = None
                 elif shared is not None:
                     if call.second is None:  # the usual case: one target

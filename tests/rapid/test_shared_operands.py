@@ -203,9 +203,12 @@ MOVES = [
 def cam_program(draw: st.DrawFn) -> str:
     routines = []
     for r in range(draw(st.integers(1, 3))):
-        local = draw(st.sampled_from(["", f"    VAR tooldata gun:={TOOL};\n"]))
+        # local names the moves' tails hold (gun) or not (k), a parameter shadowing a target
+        local = draw(st.sampled_from(["", f"    VAR tooldata gun:={TOOL};\n",
+                                      "    VAR num k:=1;\n"]))
+        params = draw(st.sampled_from(["", "robtarget p1", "num k"]))
         body = draw(st.lists(st.sampled_from(MOVES), min_size=1, max_size=12))
-        routines.append(f"  PROC r{r}()\n{local}" + "".join(f"    {b}\n" for b in body)
+        routines.append(f"  PROC r{r}({params})\n{local}" + "".join(f"    {b}\n" for b in body)
                         + "  ENDPROC\n")
     return (f"MODULE M\n  PERS tooldata gun:={TOOL};\n  PERS wobjdata table:={WOBJ};\n"
             f"  CONST robtarget p1:={TARGET};\n  CONST robtarget p2:={TARGET};\n"
@@ -324,11 +327,12 @@ def test_forgetting_the_texts_empties_every_memo_the_fast_path_keeps():
     assert not any(memos)
 
 
-def test_routines_that_declare_nothing_share_tails_and_the_others_keep_their_own():
+def test_tails_share_across_routines_unless_the_routine_declares_a_name_in_them():
     """A routine without parameters, data or FOR variables sees its module's names, so
-    its moves share operands with every such routine; a routine that declares a name
-    (a parameter, a local VAR, a FOR variable, all shadowing the module's) keeps its
-    own, as the general route reads them."""
+    its moves share operands with every such routine; so do the moves of a routine
+    whose declarations (here a parameter shadowing a target) the tail does not name.
+    A routine that declares a name its tail holds (a local VAR, a FOR variable, both
+    shadowing the module's) keeps its own, as the general route reads them."""
     plain = "    MoveL p1,v100,z1,gun\\WObj:=table;\n    MoveL p2,v100,z1,gun\\WObj:=table;\n"
     text = f"""MODULE M
   PERS tooldata gun:={TOOL};
@@ -357,7 +361,8 @@ ENDMODULE
         if motion.shared is not None:
             by_routine.setdefault(motion.routine, set()).add(id(motion.shared))
     assert len(by_routine["e"]) == 1 and by_routine["a"] == by_routine["e"]  # one tail
-    for own in ("b", "c", "d"):
+    assert by_routine["b"] == by_routine["a"]  # b declares p1, which its tail does not hold
+    for own in ("c", "d"):
         assert not by_routine.get(own, set()) & by_routine["a"]
     assert not program.motions[2].targets[0].static  # b's p1 is its parameter
     assert program.motions[4].arguments["tool"].declaration.routine == "c"  # its own gun
