@@ -353,6 +353,15 @@ def test_tails_share_across_routines_unless_the_routine_declares_a_name_in_them(
   ENDPROC
   PROC e()
 {plain}  ENDPROC
+  PROC f()
+    MoveL \\Conc \\ID:=i, p1,v100,z1,gun;
+    MoveL \\Conc \\ID:=i, p2,v100,z1,gun;
+  ENDPROC
+  PROC g()
+    VAR num i:=2;
+    MoveL \\Conc \\ID:=i, p1,v100,z1,gun;
+    MoveL \\Conc \\ID:=i, p2,v100,z1,gun;
+  ENDPROC
 ENDMODULE
 """
     program = assert_same_model(text)
@@ -364,5 +373,9 @@ ENDMODULE
     assert by_routine["b"] == by_routine["a"]  # b declares p1, which its tail does not hold
     for own in ("c", "d"):
         assert not by_routine.get(own, set()) & by_routine["a"]
+    # a name in the lead (`\\ID:=i`) counts too: g's own i, f's the module's
+    assert not by_routine["f"] & by_routine["g"]
+    ids = {m.routine: m.optional["id"].value for m in program.motions if m.routine in "fg"}
+    assert ids == {"f": 1.0, "g": 2.0}
     assert not program.motions[2].targets[0].static  # b's p1 is its parameter
     assert program.motions[4].arguments["tool"].declaration.routine == "c"  # its own gun
