@@ -604,6 +604,19 @@ class ModelBuilder:
         return _SharedTail(tuple(layout[i][0] for i in range(n_heads)), spec.target_keys,
                            tuple(entries))
 
+    def _layout(self, layouts: dict, spec: MotionSpec, module: str, rkey: str
+                ) -> tuple[_Layout, dict[object, _SharedTail | tuple | None]]:
+        """`_motions`' per-(instruction, module, routine) tables, made on first use:
+        per required position (parameter key, type hint, operand cache), and the
+        shared tails of its moves."""
+        found = layouts.get((spec, module, rkey))
+        if found is None:
+            found = layouts[(spec, module, rkey)] = (tuple(
+                (key, _ROLE_TYPES.get(key),
+                 self.name_operands.setdefault((module, rkey, _ROLE_TYPES.get(key)), {}))
+                for key in (p.lower() for p in spec.parameters)), {})
+        return found
+
     def _module_tail(self, call: s.LazyCall, scope: dict[str, object]) -> bool:
         """Whether the shared part of a call (its lead and tail) names nothing its routine
         declares (`scope`): then it means there what it means in every routine of the
@@ -643,16 +656,16 @@ class ModelBuilder:
         need their first argument's operand.
         """
         source, module_names, operands = self.source, self.module_names_as_spelt, self._operands
-        name_ref, operand, lazy_call, role_types = s.NameRef, Operand, s.LazyCall, _ROLE_TYPES
+        name_ref, operand, lazy_call = s.NameRef, Operand, s.LazyCall
         motion, declaration, global_names = MotionInstruction, Declaration, self.global_names
         # (instruction, module, routine) -> per required position: (parameter key,
         # type hint, operand cache: data name as spelt -> what an Operand of it holds),
         # and id(call tail) -> what its moves share (None: nothing; a tuple: the first
-        # call's operands, until a second call has the tail); the calls keep their tails
-        # alive while this runs, so an id is not reused
+        # call's operands, until a second call has the tail; _MODULE_TAIL: the module's
+        # table holds it); the calls keep their tails alive while this runs, so an id is
+        # not reused
         layouts: dict[tuple[MotionSpec, str, str],
                       tuple[_Layout, dict[object, _SharedTail | tuple | None]]] = {}
-        caches = self.name_operands  # (module, routine, type hint) -> operand cache
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
         pending = self.pending
@@ -668,24 +681,10 @@ class ModelBuilder:
                     # data or FOR variables) sees its module's names: its moves share
                     # operands and tails with those of every such routine
                     rkey = ""
-                found = layouts.get((spec, module, rkey))
-                if found is None:
-                    found = layouts[(spec, module, rkey)] = (tuple(
-                        (key, role_types.get(key),
-                         caches.setdefault((module, rkey, role_types.get(key)), {}))
-                        for key in (p.lower() for p in spec.parameters)), {})
-                layout, shared_tails = found
+                layout, shared_tails = self._layout(layouts, spec, module, rkey)
                 # a routine that declares names shares with the module's routines the
                 # tails that hold none of them (`_module_tail`)
-                module_tails = None
-                if rkey:
-                    around = layouts.get((spec, module, ""))
-                    if around is None:
-                        around = layouts[(spec, module, "")] = (tuple(
-                            (key, role_types.get(key),
-                             caches.setdefault((module, "", role_types.get(key)), {}))
-                            for key in (p.lower() for p in spec.parameters)), {})
-                    module_tails = around[1]
+                module_tails = self._layout(layouts, spec, module, "")[1] if rkey else None
                 last = (spec, routine, module)
                 _, head_hint, head_cache = layout[0] if layout else (None, None, None)
                 module_scope = self.module_names.get(module, _NONE)
