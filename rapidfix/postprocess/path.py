@@ -319,13 +319,15 @@ def _stalled(seg: np.ndarray, dev: np.ndarray, worst: np.ndarray,
 def refine(
     curves: Curves, q_ideal: tuple[np.ndarray, np.ndarray], q_cmd: tuple[np.ndarray, np.ndarray],
     tolerance: float, predict: Predict, solve: Solve, bound: np.ndarray | None = None,
+    given_up: np.ndarray | None = None,
 ) -> Refinement:
     """Intermediate points that keep every segment within `tolerance` mm of its curve.
 
     q_ideal, q_cmd: (start (M,6), end (M,6)) joints at the segment ends. `bound` (M,)
     an upper bound of each segment's deviation where one is known (inf elsewhere):
     segments it keeps below SCREEN × tolerance are not sampled, and the bound stands
-    as their deviation.
+    as their deviation. `given_up` (M,) bool: segments known not to close (failed at
+    once, not sampled).
     """
     m = curves.start.shape[0]
     seg = np.arange(m)
@@ -336,10 +338,15 @@ def refine(
     deviation = np.zeros(m)
     out_seg, out_s, out_qi, out_qc = [], [], [], []
     target = MARGIN * tolerance
+    keep = np.ones(m, dtype=bool)
     if bound is not None:
         settled = np.asarray(bound, dtype=float) <= SCREEN * tolerance
         deviation[settled] = np.asarray(bound, dtype=float)[settled]
-        keep = ~settled
+        keep &= ~settled
+    if given_up is not None:
+        failed |= given_up
+        keep &= ~given_up
+    if not keep.all():
         seg, s0, s1, qi0, qi1, qc0, qc1 = (x[keep] for x in (seg, s0, s1, qi0, qi1, qc0, qc1))
     worst = np.full(m, np.inf)  # per segment: its worst piece in the round before
     stalled = np.zeros(m, dtype=int)  # rounds in a row its worst piece has not halved

@@ -36,6 +36,9 @@ from rapidfix.rapid import STOPS_SHORT, MotionInstruction, Program
 
 #: why a MoveL/MoveC kept its instruction when its start is not known
 START_UNKNOWN = "start not known before run time"
+#: why a MoveL/MoveC kept its instruction when it starts off its path (with the tolerance)
+OFF_START = ("it starts where the MoveAbsJ before it leaves the robot, farther from its "
+             "path than the path tolerance")
 
 
 @dataclass(frozen=True)
@@ -216,12 +219,20 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
 
     bound = _line_bounds(robot, p, start_flange, to_row, q0c, frames)
     bound[circular] = np.inf
+    # a segment whose robot starts off its path farther than the tolerance (after a
+    # MoveAbsJ, whose joints are written as they are: no other start is off) cannot be
+    # closed by any number of points: given up before it is split
+    off = np.zeros(len(segs), dtype=bool)
+    if absj:
+        rows = np.fromiter(absj, dtype=np.int64, count=len(absj))
+        off[rows] = curves.distance(rows, predict(rows, q0c[rows])) > path_tolerance_mm
     points = refine(curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
-                    path_tolerance_mm, predict, solve, bound)
+                    path_tolerance_mm, predict, solve, bound, given_up=off)
     for k in np.flatnonzero(points.failed):
         mode[segs[k]] = "filtered"
         filtered_reason[segs[k]] = (
             "its arc is degenerate" if curves.degenerate[k] else
+            f"{OFF_START} {path_tolerance_mm:g} mm" if off[k] else
             "no intermediate points keep its path within the path tolerance "
             f"{path_tolerance_mm:g} mm")
     solved, direction = p, None

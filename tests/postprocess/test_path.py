@@ -264,3 +264,83 @@ def test_a_segment_whose_worst_piece_stops_improving_is_given_up_early():
     curves2, ends2, predict2, solve2, _ = _bowed_lines(np.zeros(2, dtype=bool))
     r2 = path.refine(curves2, ends2, ends2, 0.1, predict2, solve2)
     assert np.array_equal(r.s[r.seg == 0], r2.s[r2.seg == 0])
+
+
+def _pick_and_place(robot, n: int = 12) -> tuple[str, np.ndarray]:
+    """`MoveAbsJ` to a jointtarget 50 mm above each point, then `MoveL` down to it; every
+    third jointtarget holds the same pose with the other wrist (axis 5 negated, 4 and 6
+    turned half a turn). Returns the program and which lines start on the other wrist."""
+    rng = np.random.default_rng(5)
+    wobj = _frame([850, 80, 450], [0.923879533, 0, -0.382683432, 0])
+    tool = _frame([0, 0, 100], [1, 0, 0, 0])
+    rot = [0, 0.258819045, 0.965925826, 0]
+    rot_text = ",".join(map(str, rot))
+    extax = ",".join(["9E+09"] * 6)
+    flipped = np.arange(n) % 3 == 2
+    decls, moves = [], []
+    for k in range(n):
+        xy = rng.uniform(-120, 120, 2)
+        point, above = _frame([*xy, 0.0], rot), _frame([*xy, 50.0], rot)
+        seed = np.radians([[5, 25, 30, 0, -20, 10]])
+        q, status = robot.ik_nearest((wobj @ point @ np.linalg.inv(tool))[None], seed)
+        qa, status_a = robot.ik_nearest((wobj @ above @ np.linalg.inv(tool))[None], q)
+        assert status[0] == 0 and status_a[0] == 0
+        qa = qa[0]
+        if flipped[k]:
+            qa = qa + np.array([0, 0, 0, np.pi, 0, np.pi])
+            qa[4] = -qa[4]
+            qa[[3, 5]] = np.angle(np.exp(1j * qa[[3, 5]]))
+        conf = ",".join(str(c) for c in robot.confdata(q)[0])
+        joints = ",".join(f"{v:.6f}" for v in np.degrees(qa))
+        decls += [f"  CONST jointtarget jA{k}:=[[{joints}],[{extax}]];",
+                  f"  CONST robtarget p{k}:=[[{xy[0]:.4f},{xy[1]:.4f},0],[{rot_text}],[{conf}],"
+                  f"[{extax}]];"]
+        moves += [f"    MoveAbsJ jA{k}\\NoEOffs, v1000, z50, tBar\\WObj:=wPlate;",
+                  f"    MoveL p{k}, v200, fine, tBar\\WObj:=wPlate;"]
+    return "\n".join([
+        "MODULE Pick",
+        "  PERS tooldata tBar:=[TRUE,[[0,0,100],[1,0,0,0]],[1.2,[0,0,60],[1,0,0,0],0,0,0]];",
+        '  PERS wobjdata wPlate:=[FALSE,TRUE,"",[[850,80,450],[0.923879533,0,-0.382683432,0]],'
+        "[[0,0,0],[1,0,0,0]]];",
+        *decls, "  PROC main()", *moves, "  ENDPROC", "ENDMODULE", ""]), flipped
+
+
+def _general_route(monkeypatch):
+    """Make refine_paths split every open segment (no segment given up before)."""
+    from rapidfix.postprocess import path, refinement
+
+    monkeypatch.setattr(refinement, "refine",
+                        lambda *args, given_up=None, **kwargs: path.refine(*args, **kwargs))
+
+
+@pytest.mark.filterwarnings("ignore::rapidfix.error_model.joint_rbf.OutsideRangeWarning")
+def test_lines_that_start_off_their_path_are_given_up_as_the_general_route_gives_them_up(
+        cell, comp, monkeypatch):
+    from rapidfix.postprocess.refinement import OFF_START
+
+    robot, model = cell["robot"], cell["model"]
+    text, _ = _pick_and_place(robot)
+    tol = 0.05
+    result = rewrite_source(text.encode(), "pick.mod", comp, RewriteOptions(path_tolerance_mm=tol))
+    # the truth: where the robot stands after each MoveAbsJ (its joints as written), how
+    # far from the line down to the point
+    program = parse_program(text)
+    wobj = _frame([850, 80, 450], [0.923879533, 0, -0.382683432, 0])
+    tool = _frame([0, 0, 100], [1, 0, 0, 0])
+    off = 0
+    for absj, line in itertools.pairwise(program.motions):
+        if absj.name != "MoveAbsJ":
+            continue
+        q = np.radians(np.asarray(absj.target.data.robax, dtype=float))
+        start = (np.linalg.inv(wobj) @ model.actual_flange(robot, q[None])[0] @ tool)[:3, 3]
+        a = (np.linalg.inv(wobj) @ robot.fk(q[None])[0] @ tool)[:3, 3]
+        b = np.asarray(line.target.data.trans, dtype=float)
+        t = np.clip(np.dot(start - a, b - a) / np.dot(b - a, b - a), 0, 1)
+        off += np.linalg.norm(start - a - t * (b - a)) > tol
+    assert off > 0
+    assert result.filtered_reasons.get(f"{OFF_START} {tol:g} mm") == off
+    # the general route splits them for rounds, and gives them up too: the same bytes
+    _general_route(monkeypatch)
+    general = rewrite_source(text.encode(), "pick.mod", comp,
+                             RewriteOptions(path_tolerance_mm=tol))
+    assert general.data == result.data and general.moves_filtered == result.moves_filtered
