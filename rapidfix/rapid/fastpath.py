@@ -941,10 +941,42 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
 
 def _head_node(text: str, at: int) -> s.Expr:
     """The node of a call's first required value `text` at `at`: a name (not `a.b`,
-    `a+1`, `f(x)`, `a{i}`, TRUE or FALSE) made at once, any other by _value_node."""
+    `a+1`, `f(x)`, `a{i}`, TRUE or FALSE) made at once, a function call of a name and
+    numbers by `_named_call`, any other by _value_node."""
     if text.isidentifier() and (len(text) > 5 or text.upper() not in _BOOLS):
         return s.NameRef(at, at + len(text), sys.intern(text))
+    if text[-1] == ")":
+        call = _named_call(text, at)
+        if call is not None:
+            return call
     return _value_node(text, at)
+
+
+# A function call of a data name and decimal numbers written without spaces
+# (`Offs(p7,0,0,-10)`, `RelTool(p3,0,0,5)`): a move's target as most programs write it
+_NAMED_CALL = re.compile(
+    rf"({NAME})\(({NAME})((?:,-?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)+\))")
+
+
+def _named_call(text: str, start: int) -> s.LazyFunctionCall | None:
+    """What _value_node makes of `text` (through _call_node) when it is a call of a name
+    and numbers (`_NAMED_CALL`), read by one pattern; None for any other text."""
+    m = _NAMED_CALL.fullmatch(text)
+    if m is None:
+        return None
+    first = m.group(2)
+    if len(first) <= 5 and first.upper() in _BOOLS:  # TRUE, FALSE: not names
+        return None
+    tail_at = m.start(3)
+    node = s.NameRef(start + m.start(2), start + tail_at, sys.intern(first))
+    tail_text = m.group(3)
+    tail = _INNER_TAILS.get(tail_text)
+    if tail is None:
+        tail = CallTail(tail_text, _INNER_PIECE)
+        _INNER_TAILS.keep(tail_text, tail)
+    return s.LazyFunctionCall(start, start + len(text), sys.intern(m.group(1)),
+                              s.Argument(node.start, node.end, "required", None, node),
+                              tail, start + tail_at)
 
 
 def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.Assignment:

@@ -248,3 +248,35 @@ def test_a_late_error_after_many_fast_procedure_heads_is_explained_as_in_full():
                 (f"PROC Path_{k}()", "  MoveL p1,v100,z1,tool0;", "ENDPROC")]
     text = module(*routines[:-3], "PROC last()", "  MoveL p1 v100,z1,tool0;", "ENDPROC")
     assert_parses_as_plain(text)
+
+
+# ------------------------------------------------ a move's target `Offs(p7,0,0,-10)`
+_NUMBER_TEXTS = st.sampled_from(["0", "-0", "10", "-0.5", "1.", ".5", "-1e3", "2E-2", "0x1F",
+                                 "1.5e+2", "-.25", "007"])
+_HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "ORIENT", "p10x"])
+
+
+@st.composite
+def named_call(draw: st.DrawFn) -> str:
+    """A call of a name and numbers as a move's target, tight or with a space somewhere."""
+    name = draw(st.sampled_from(["Offs", "RelTool", "Foo", "offs"]))
+    numbers = draw(st.lists(_NUMBER_TEXTS, min_size=1, max_size=4))
+    text = f"{name}({draw(_HEAD_NAMES)},{','.join(numbers)})"
+    if draw(st.booleans()):  # a space or a switch the one-pattern route does not take
+        at = draw(st.integers(0, len(text) - 1))
+        text = text[:at] + draw(st.sampled_from([" ", "\\Rz:=90,", "\n"])) + text[at:]
+    return text
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(named_call())
+def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_grammar_read_it(text):
+    from rapidfix.rapid import fastpath
+
+    fast = fastpath._named_call(text, 7)
+    if fast is not None:  # what _value_node (through _call_node) makes, to the shared tail
+        general = fastpath._value_node(text, 7)
+        assert shape(fast) == shape(general) and fast.tail is general.tail
+        assert shape(fast.args) == shape(general.args)
+    assert_parses_as_plain(routine(f"MoveL {text},v100,z1,tool0\\WObj:=w;",
+                                   f"MoveL {text}, v100, z1, tool0;"))
