@@ -475,14 +475,14 @@ class _Emitter:
         statement. What an intermediate point changes (its zone, the optional arguments
         it drops) all stands after the target, so moves of one instruction with the same
         shape have the same parts: a program's thousands of arcs cost one variant each
-        distinct speed, zone and tool combination, and their operands are not made."""
+        distinct speed, zone and tool combination, and their operands are not made. (The
+        shape holds the statement's whole text but the target's, so an argument dropped
+        before the target, `MoveL \\ID:=3, p1, ...`, is dropped the same way for all.)"""
         key = None if shape is None else (site.motion.syntax.name, *shape)
         parts = self.variant_parts.get(key) if key is not None else None
         if parts is None:
             motion = site.motion
             edits = _intermediate_edits(motion)
-            if key is not None and any(a < site.targets[-1].argument.end for a, _, _ in edits):
-                key = None  # an edit before the target: this move's own statement
             split = statement_variant(self.program, motion, joint_edits(
                 site, _NAME_MARK) + edits).split(_NAME_MARK)
             parts = (split[0], split[1]) if len(split) == 2 else ()

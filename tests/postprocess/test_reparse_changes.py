@@ -238,6 +238,10 @@ def _arcs() -> str:
         lambda line: line.replace(", vFeed,", ", vFeed \\T:=2,"),
         lambda line: line.replace(", fine,", ", ! zone next\n      fine,"),
         lambda line: line.replace(", fine,", ",fine ,"),
+        # arguments an intermediate point drops before the target: the same statement
+        # parts for every move of one text, shared
+        lambda line: line.replace("MoveC ", "MoveC \\Conc \\ID:=7, "),
+        lambda line: line.replace("MoveC ", "MoveC \\T:=2 \\Conc, "),
     ]
     lines, k = [], 0
     for line in shape_program("movec", 400).splitlines():
@@ -249,12 +253,14 @@ def _arcs() -> str:
 
 
 @pytest.mark.parametrize("emit", ["jointtargets", "robtargets"])
-@pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked", "arcs"])
+@pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked", "arcs",
+                                  "concurrent"])
 def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeypatch, comp, name,
                                                                         emit):
     data = (cam_program(200) if name == "cam" else _filtered_cases()
             if name == "filtered_cases" else _STACKED if name == "stacked"
-            else _arcs() if name == "arcs" else (SAMPLES / name).read_bytes())
+            else _arcs() if name == "arcs" else odd_program("concurrent", 300)
+            if name == "concurrent" else (SAMPLES / name).read_bytes())
     data = data.encode() if isinstance(data, str) else data
     options = RewriteOptions(emit=emit, force=True)
     columns = rewrite_source(data, name, comp, options)
@@ -267,7 +273,8 @@ def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeyp
         assert columns.points_added > 50
         for shown in ["MoveAbsJ \\Conc, jt_", "_1, vFeed, z0, tMill", "_1, vFeed, z0 , tMill",
                       "_1, vFeed , z0, tMill", "_1, vFeed, ! zone next\n      z0,",
-                      "_1, vFeed,z0 , tMill"]:
+                      "_1, vFeed,z0 , tMill", "MoveAbsJ \\Conc \\ID:=7, jt_",
+                      "MoveAbsJ \\T:=2 \\Conc, jt_"]:
             assert shown in out, shown
     assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm
     if name == "filtered_cases" and emit == "robtargets":
