@@ -393,6 +393,14 @@ class ModelBuilder:
                                True, None, None)
             return Operand(arg, self.source, None, *self._operand_fields(
                 expr, type_hint, module, routine))
+        if type(expr) is s.LazyFunctionCall:
+            # `Offs(p7,0,0,10)`: a text that seldom recurs (its first argument changes
+            # from move to move), read in one step and not kept: what _operand_fields
+            # gives, before the texts of the scope are looked up (the model of the plain
+            # grammar's tree, which reads no call lazily, is tested equal)
+            known = self._named_call_fields(expr, type_hint, module, routine)
+            if known is not None:
+                return Operand(arg, self.source, None, *known)
         text = self.source.text[expr.start:expr.end]
         # the same text in the same scope has the same form, value and declaration
         # (every declaration is resolved before the motions are made): read it once
@@ -401,12 +409,6 @@ class ModelBuilder:
             texts = self.operand_texts[(module, routine, type_hint)] = {}
         known = texts.get(text)
         if known is None:
-            if type(expr) is s.LazyFunctionCall:
-                # `Offs(p7,0,0,10)`: a text that seldom recurs (its first argument changes
-                # from move to move), read in one step and not kept
-                known = self._named_call_fields(expr, type_hint, module, routine)
-                if known is not None:
-                    return Operand(arg, self.source, None, *known)
             known = texts[text] = self._operand_fields(expr, type_hint, module, routine)
         return Operand(arg, self.source, None, *known)
 
