@@ -48,6 +48,10 @@ class Evaluator:
         self.records = dict(RECORD_FIELDS)
         if records:
             self.records.update(records)
+        #: id(shared tail) -> (the tail, `_scoped_tail` of it): the values of tails whose
+        #: arguments hold names (`Offs(p1,0,0,nLift)`), each evaluated once; None (the
+        #: default) keeps none, for as long as a name's value may still change
+        self.tails: dict[int, tuple] | None = None
 
     def value(self, expr: s.Expr) -> Value:
         """The value of `expr`; raises NotConstant."""
@@ -153,6 +157,8 @@ class Evaluator:
         if head is None or head.value is None:
             return self._call(expr)
         constants, arguments = _tail_values(expr.tail)
+        if constants is None:
+            constants = self._scoped_tail(expr.tail, arguments)
         if constants is None:  # not all literals: its arguments as read, at offset 0
             return self._call(expr, [head, *arguments])
         handler = _handler(expr)
@@ -172,7 +178,9 @@ class Evaluator:
 
         A program with a hundred thousand such calls has as many distinct texts: each
         needs its own value, but not the layers of the general route."""
-        constants = _tail_values(expr.tail)[0]
+        constants, arguments = _tail_values(expr.tail)
+        if constants is None:
+            constants = self._scoped_tail(expr.tail, arguments)
         if constants is None:
             return None
         handler = _handler(expr)
@@ -182,6 +190,38 @@ class Evaluator:
         if failure is not None:
             raise NotConstant(failure)
         return _apply(expr, handler, [first, *required], optional)
+
+
+    def _scoped_tail(self, tail: s.ArgumentTail, arguments: list[s.Argument]
+                     ) -> tuple | None:
+        """_tail_values' constants of a shared tail whose arguments hold names, evaluated
+        in this evaluator's scope once while `tails` is kept (else None): its arguments
+        are read in the order `_call` reads them after the first, so a failure gives the
+        reason `_call` gives."""
+        kept = self.tails
+        if kept is None:
+            return None
+        known = kept.get(id(tail))
+        if known is not None and known[0] is tail:
+            return known[1]
+        try:
+            required = [self.value(a.value) for a in arguments
+                        if a.kind == "required" and a.value is not None]
+            optional = {a.key: (self.value(a.value) if a.value is not None else True)
+                        for a in arguments if a.kind == "optional"}
+            if any(a.kind == "conditional" for a in arguments):
+                raise NotConstant("conditional argument is decided at run time")
+            values: tuple = (tuple(required), optional, None)
+        except NotConstant as err:
+            values = ((), {}, err.reason)
+        if len(kept) >= _KEPT_TAILS:
+            kept.clear()
+        kept[id(tail)] = (tail, values)
+        return values
+
+
+#: the most tails an evaluator keeps (`Evaluator._scoped_tail`)
+_KEPT_TAILS = 4096
 
 
 def _placeholder(evaluator: Evaluator, expr: s.Placeholder) -> TypedValue:

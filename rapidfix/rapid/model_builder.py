@@ -229,6 +229,8 @@ class ModelBuilder:
                     raise NotConstant(found.reason)
                 return found
             evaluator = self.evaluators[key] = Evaluator(lookup, self.records)
+            if self.settled:  # names keep their values now: a tail's are worth keeping
+                evaluator.tails = {}
         return evaluator
 
     # ------------------------------------------------------------ pass 2
@@ -785,6 +787,8 @@ class ModelBuilder:
             else:
                 resolve(decl)
         self.settled = True
+        for evaluator in self.evaluators.values():
+            evaluator.tails = {}
         self.state = {}  # not needed any more: its memory is the motions' to use
         self.program.motions = self._motions()
         # The evaluators' lookups refer back to this builder: break that cycle so

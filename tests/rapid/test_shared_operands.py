@@ -271,6 +271,52 @@ ENDMODULE
     assert any(isinstance(m.syntax.args[0].value, s.LazyFunctionCall) for m in program.motions)
 
 
+def test_call_tails_that_hold_names_are_evaluated_once_per_scope_as_the_general_route_does():
+    # `Offs(p1,0,0,nLift)`: the tail's names are the same in every move of a routine, its
+    # values kept per scope once the names settle; every failure gives the plain
+    # grammar's reason, and a routine's own name shadows the module's in its tails
+    text = f"""MODULE M
+  PERS tooldata gun:={TOOL};
+  CONST robtarget p1:={TARGET};
+  CONST robtarget p2:={TARGET};
+  CONST num nLift:=50;
+  CONST num nTurn:=nLift*2-10;
+  VAR num nRun:=1;
+  CONST string sName:="x";
+  PROC main()
+    MoveL Offs(p1,0,0,nLift),v100,z1,gun;
+    MoveL Offs(p2,0,0,nLift),v100,z1,gun;
+    MoveL Offs(p1,nLift/2,-nLift,nTurn+1),v100,z1,gun;
+    MoveL Offs(p2,nLift/2,-nLift,nTurn+1),v100,z1,gun;
+    MoveL RelTool(p1,0,0,nLift\\Rz:=nTurn),v100,z1,gun;
+    MoveL RelTool(p2,0,0,nLift\\Rz:=nTurn),v100,z1,gun;
+    MoveL RelTool(p2,0,0,1\\Rz:=nRun),v100,z1,gun;
+    MoveL Offs(p1,0,0,nRun),v100,z1,gun;
+    MoveL Offs(p2,0,nRun,nowhere),v100,z1,gun;
+    MoveL Offs(p1,0,0,sName),v100,z1,gun;
+    MoveL Offs(p2,0,0,nLift/0),v100,z1,gun;
+    MoveL Offs(moving,0,0,nLift),v100,z1,gun;
+    MoveL Offs(p1,0,0,nLift,nLift),v100,z1,gun;
+  ENDPROC
+  PROC other(num nLift)
+    MoveL Offs(p1,0,0,nLift),v100,z1,gun;
+    MoveL Offs(p2,0,0,nTurn),v100,z1,gun;
+  ENDPROC
+  PROC more()
+    CONST num nTurn:=7;
+    MoveL Offs(p1,0,0,nTurn),v100,z1,gun;
+    MoveL Offs(p2,0,0,nLift),v100,z1,gun;
+  ENDPROC
+ENDMODULE
+"""
+    program = assert_same_model(text)
+    calls = [m.target for m in program.motions]
+    assert sum(t.static for t in calls) >= 8 and sum(not t.static for t in calls) >= 6
+    by_line = {m.syntax.start: m.target for m in program.motions}
+    values = [t.value[0][2] for t in by_line.values() if t.static and t.form == "offs"]
+    assert 350.0 in values and 307.0 in values  # the target's z + nLift; + nTurn in `more`
+
+
 def test_calls_of_calls_read_in_one_step_give_the_general_model():
     """A call whose first argument is itself such a call (`Offs(RelTool(p1,0,0,1),0,0,2)`),
     nested up to the limit and past it, with every refusal at each level: the plain
