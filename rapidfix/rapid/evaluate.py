@@ -204,16 +204,7 @@ class Evaluator:
         known = kept.get(id(tail))
         if known is not None and known[0] is tail:
             return known[1]
-        try:
-            required = [self.value(a.value) for a in arguments
-                        if a.kind == "required" and a.value is not None]
-            optional = {a.key: (self.value(a.value) if a.value is not None else True)
-                        for a in arguments if a.kind == "optional"}
-            if any(a.kind == "conditional" for a in arguments):
-                raise NotConstant("conditional argument is decided at run time")
-            values: tuple = (tuple(required), optional, None)
-        except NotConstant as err:
-            values = ((), {}, err.reason)
+        values = _read_tail(self, arguments)
         if len(kept) >= _KEPT_TAILS:
             kept.clear()
         kept[id(tail)] = (tail, values)
@@ -298,22 +289,27 @@ def _tail_values(tail: s.ArgumentTail) -> tuple[tuple | None, list[s.Argument]]:
     arguments = tail.arguments(0)
     result: tuple | None = None
     if all(_is_constant(a.value) for a in arguments):
-        evaluator = Evaluator(_no_names)
-        try:
-            required = [evaluator.value(a.value) for a in arguments
-                        if a.kind == "required" and a.value is not None]
-            optional = {a.key: (evaluator.value(a.value) if a.value is not None else True)
-                        for a in arguments if a.kind == "optional"}
-            if any(a.kind == "conditional" for a in arguments):
-                raise NotConstant("conditional argument is decided at run time")
-            result = (tuple(required), optional, None)
-        except NotConstant as err:
-            result = ((), {}, err.reason)
+        result = _read_tail(Evaluator(_no_names), arguments)
     if len(_TAIL_VALUES) >= 4096:
         _TAIL_VALUES.clear()
     values = (result, [] if result is not None else arguments)
     _TAIL_VALUES[id(tail)] = (tail, values)
     return values
+
+
+def _read_tail(evaluator: Evaluator, arguments: list[s.Argument]) -> tuple:
+    """(required values, optional values, None) of a call's arguments after its first,
+    read in the order `Evaluator._call` reads them, or ((), {}, the reason it would give)."""
+    try:
+        required = [evaluator.value(a.value) for a in arguments
+                    if a.kind == "required" and a.value is not None]
+        optional = {a.key: (evaluator.value(a.value) if a.value is not None else True)
+                    for a in arguments if a.kind == "optional"}
+        if any(a.kind == "conditional" for a in arguments):
+            raise NotConstant("conditional argument is decided at run time")
+    except NotConstant as err:
+        return (), {}, err.reason
+    return tuple(required), optional, None
 
 
 def _num_op(op: str, a: float, b: float) -> TypedValue:
