@@ -191,7 +191,6 @@ class Evaluator:
             raise NotConstant(failure)
         return _apply(expr, handler, [first, *required], optional)
 
-
     def _scoped_tail(self, tail: s.ArgumentTail, arguments: list[s.Argument]
                      ) -> tuple | None:
         """_tail_values' constants of a shared tail whose arguments hold names, evaluated
