@@ -320,7 +320,7 @@ def test_lines_that_start_off_their_path_are_given_up_as_the_general_route_gives
 
     robot, model = cell["robot"], cell["model"]
     text, _ = _pick_and_place(robot)
-    tol = 0.05
+    tol = 0.2  # some lines start within it, some off it
     result = rewrite_source(text.encode(), "pick.mod", comp, RewriteOptions(path_tolerance_mm=tol))
     # the truth: where the robot stands after each MoveAbsJ (its joints as written), how
     # far from the line down to the point
@@ -337,8 +337,9 @@ def test_lines_that_start_off_their_path_are_given_up_as_the_general_route_gives
         b = np.asarray(line.target.data.trans, dtype=float)
         t = np.clip(np.dot(start - a, b - a) / np.dot(b - a, b - a), 0, 1)
         off += np.linalg.norm(start - a - t * (b - a)) > tol
-    assert off > 0
+    assert 0 < off < 12
     assert result.filtered_reasons.get(f"{OFF_START} {tol:g} mm") == off
+    assert result.points_added > 0  # lines that start within the tolerance are refined
     # the general route splits them for rounds, and gives them up too: the same bytes
     _general_route(monkeypatch)
     general = rewrite_source(text.encode(), "pick.mod", comp,
