@@ -140,15 +140,10 @@ class Evaluator:
         """The value of a function call; `args` its arguments where they are at hand
         (their values are what counts, not where they stand), else `expr.args`."""
         handler = _handler(expr)
-        if args is None:
-            args = expr.args
-        required = [self.value(a.value) for a in args
-                    if a.kind == "required" and a.value is not None]
-        optional = {a.key: (self.value(a.value) if a.value is not None else True)
-                    for a in args if a.kind == "optional"}
-        if any(a.kind == "conditional" for a in args):
-            raise NotConstant("conditional argument is decided at run time")
-        return _apply(expr, handler, required, optional)
+        required, optional, failure = _read_tail(self, expr.args if args is None else args)
+        if failure is not None:
+            raise NotConstant(failure)
+        return _apply(expr, handler, list(required), optional)
 
     def _lazy_call(self, expr: s.LazyFunctionCall) -> TypedValue:
         """_call of a function call whose further arguments are a shared tail: a tail of
@@ -297,8 +292,9 @@ def _tail_values(tail: s.ArgumentTail) -> tuple[tuple | None, list[s.Argument]]:
 
 
 def _read_tail(evaluator: Evaluator, arguments: list[s.Argument]) -> tuple:
-    """(required values, optional values, None) of a call's arguments after its first,
-    read in the order `Evaluator._call` reads them, or ((), {}, the reason it would give)."""
+    """(required values, optional values, None) of a call's arguments (or of those after
+    its first), required ones first, then optional ones, then a conditional one refused;
+    or ((), {}, the reason of the first that is not constant)."""
     try:
         required = [evaluator.value(a.value) for a in arguments
                     if a.kind == "required" and a.value is not None]
