@@ -199,7 +199,7 @@ class Editor:
 
     def _newlines(self, text: str) -> str:
         text = text.replace("\r\n", "\n")
-        newline = self._source.newline
+        newline = self._source.text_newline
         return text if newline == "\n" else text.replace("\n", newline)
 
     def _ordered(self) -> tuple[list[int], list[int], list[str | _Lines]]:
@@ -224,7 +224,7 @@ class Editor:
         """The edited text (decoded)."""
         original = self._source.text
         # new text is written with '\n': in a '\n' file only a stray '\r\n' needs work
-        marker = "\r" if self._source.newline == "\n" else "\n"
+        marker = "\r" if self._source.text_newline == "\n" else "\n"
         newlines = self._newlines
         starts, ends, kept = self._ordered()
         gaps = [original[a:b] for a, b in zip([0, *ends], starts)]

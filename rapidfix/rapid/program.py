@@ -280,7 +280,7 @@ class Program:
 
     @property
     def newline(self) -> str:
-        """The file's dominant line ending ('\\n' or '\\r\\n')."""
+        """The file's dominant line ending ('\\n', '\\r\\n' or a lone '\\r')."""
         return self.source.newline
 
     @property

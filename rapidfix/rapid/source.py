@@ -36,6 +36,8 @@ class SourceText:
     filename: str = "<string>"
     encoding: str = "utf-8"
     bom: bytes = b""
+    #: the file's dominant line ending: '\n', '\r\n', or '\r' for a file whose lines all
+    #: end in a lone CR (its `text` has '\n' there: see `text_newline`)
     newline: str = "\n"
     # offsets of the line starts, as machine integers: a million-line program's would
     # take 36 MB as a list of Python ints, 8 MB as an array
@@ -52,6 +54,12 @@ class SourceText:
                 add(pos + 1)
                 pos = find("\n", pos + 1)
             object.__setattr__(self, "_line_starts", starts)
+
+    @property
+    def text_newline(self) -> str:
+        """The line ending in `text`: the file's, but '\\n' where a file's lone CRs were
+        read as LF (`encode` writes them back)."""
+        return "\n" if self.newline == "\r" else self.newline
 
     def line_column(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a character offset."""
@@ -70,6 +78,8 @@ class SourceText:
     def encode(self, text: str | None = None) -> bytes:
         """Bytes of `text` (default: the original text) in the file's encoding, BOM first."""
         body = self.text if text is None else text
+        if self.newline == "\r":  # read with LF (see `_source_text`): written with CR
+            body = body.replace("\n", "\r")
         try:
             return self.bom + body.encode(self.encoding)
         except UnicodeEncodeError as err:
@@ -95,12 +105,21 @@ def dominant_newline(text: str) -> str:
     return "\r\n" if crlf > lf else "\n"
 
 
+def _source_text(text: str, filename: str, encoding: str, bom: bytes) -> SourceText:
+    """A SourceText of decoded `text`. A file whose lines end in a lone CR (old Mac
+    editors) and never in LF is read with LF: its comments then end where its lines
+    do and its lines are counted as an editor shows them; `encode` writes CR again."""
+    if "\r" in text and "\n" not in text:
+        return SourceText(text.replace("\r", "\n"), filename, encoding, bom, "\r")
+    return SourceText(text, filename, encoding, bom, dominant_newline(text))
+
+
 def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
     """Decode file bytes (or take text as is) into a SourceText; binary data is refused."""
     if isinstance(data, str):
         text = data[1:] if data.startswith("\ufeff") else data
         bom = codecs.BOM_UTF8 if data.startswith("\ufeff") else b""
-        return SourceText(text, filename, "utf-8", bom, dominant_newline(text))
+        return _source_text(text, filename, "utf-8", bom)
     bom, encoding = b"", ""
     for mark, name in _BOMS:
         if data.startswith(mark):
@@ -127,7 +146,7 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
                 line=line,
             )
         text, encoding = _decode_8bit(body)
-    return SourceText(text, filename, encoding, bom, dominant_newline(text))
+    return _source_text(text, filename, encoding, bom)
 
 
 def _first_binary_byte(body: bytes) -> int:

@@ -76,6 +76,21 @@ def test_crlf_and_cp1252_are_kept(comp):
     parse_program(out, "legacy_out.mod")
 
 
+def test_lone_cr_lines_are_kept(comp):
+    """A program whose lines end in a lone CR is rewritten as the same program with LF
+    is, line for line, and its new lines end in CR too."""
+    text = ballbar_program()
+    with_lf = rewrite_source(text.encode(), "legacy.mod", comp, RewriteOptions())
+    with_cr = rewrite_source(text.replace("\n", "\r").encode(), "legacy.mod", comp,
+                             RewriteOptions())
+    assert with_cr.moves_compensated == with_lf.moves_compensated == 21
+    assert b"\n" not in with_cr.data
+    digest = re.compile(rb"input_sha256: [0-9a-f]+")  # of different bytes
+    assert (digest.sub(b"", with_cr.data.replace(b"\r", b"\n"))
+            == digest.sub(b"", with_lf.data))
+    assert [s.where for s in with_cr.skipped] == [s.where for s in with_lf.skipped]
+
+
 def test_rewrite_is_deterministic_and_inputs_are_bytes_in_bytes_out(comp):
     data = ballbar_program().encode()
     a = rewrite_source(data, "a.mod", comp, RewriteOptions())

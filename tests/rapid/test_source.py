@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import parse_program
 from rapidfix.rapid.source import decode_source, dominant_newline
 
@@ -16,7 +17,7 @@ BODY = "MODULE M\n! Schweißnaht, 90°\nPROC main()\n  TPWrite \"Grüße\";\nEND
     ("cp1252", b"", "cp1252"),
     ("utf-16-le", b"\xff\xfe", "utf-16-le"),
 ])
-@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+@pytest.mark.parametrize("newline", ["\n", "\r\n", "\r"])
 @pytest.mark.parametrize("final", ["", "\n"])
 def test_round_trip_bytes(encoding, bom, expected, newline, final):
     text = (BODY + final).replace("\n", newline)
@@ -45,6 +46,24 @@ def test_mixed_newlines():
     assert dominant_newline("a\r\nb\r\nc\n") == "\r\n"
     program = parse_program(text.encode())
     assert [d.span.line for d in program.declarations] == [2, 3]
+
+
+def test_lone_cr_lines_are_read_as_lines():
+    """A file whose lines all end in a lone CR (old Mac editors): its text has LF there,
+    so a comment ends with its line and errors name the line an editor shows."""
+    text = "MODULE M\r  ! a comment\r  VAR num a;\r  VAR num b;\rENDMODULE\r"
+    source = decode_source(text.encode())
+    assert source.newline == "\r" and source.text_newline == "\n"
+    assert source.text == text.replace("\r", "\n")
+    assert source.encode() == text.encode()
+    program = parse_program(text.encode())
+    assert [d.span.line for d in program.declarations] == [3, 4]
+    with pytest.raises(RapidSyntaxError) as err:
+        parse_program(text.replace("VAR num b;", "VAR num b").encode(), "cr.mod")
+    assert (err.value.line, err.value.column) == (5, 1)
+    # one LF anywhere: the file's CRs are not line ends but whitespace, as the grammar says
+    mixed = "MODULE M\r  VAR num a;\n  VAR num b;\rENDMODULE\n"
+    assert decode_source(mixed.encode()).text == mixed
 
 
 def test_line_column_of_offsets():
