@@ -36,6 +36,8 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                MoveAbsJ (written as it is) leaves the robot, off the intended start;
                every third jointtarget has the wrist flipped, so its line down swings
                through the wrist singularity: the path check's hopeless segments
+- lone_cr:     a file from an old Mac editor: every line ends in a lone CR (no LF
+               anywhere), with comments on their own lines and after statements
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -54,7 +56,7 @@ from rapidfix.kinematics import load_robot
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
-              "concurrent", "flips")
+              "concurrent", "flips", "lone_cr")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -396,23 +398,37 @@ def _flips(n: int) -> list[str]:
     return [*_head("Flips"), *decls, *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _lone_cr(n: int) -> list[str]:
+    moves = [f"    MoveL p{k}, v100, z1, tMill\\WObj:=wPlate;"
+             + (" ! approach" if k % 4 == 0 else "") for k in range(n)]
+    for k in range(0, n, 25):
+        moves[k] = f"    ! pass {k // 25}\n{moves[k]}"
+    return [*_head("LoneCr"), "  ! every line of this file ends in a lone CR", *_decls(n),
+            *_parts(moves), "ENDMODULE"]
+
+
+#: the line ending a shape's lines are joined with, where it is not LF
+_NEWLINES = {"lone_cr": "\r"}
+
 _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "deep": _deep, "expressions": _expressions, "modules": _modules, "wide": _wide,
              "assign": _assign, "io": _io, "loops": _loops, "failing": _failing,
              "records": _records, "messages": _messages, "conditions": _conditions,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
              "remarks": _remarks, "spaced": _spaced,
-             "latin1": _latin1, "concurrent": _concurrent, "flips": _flips}
+             "latin1": _latin1, "concurrent": _concurrent, "flips": _flips,
+             "lone_cr": _lone_cr}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
     """The program text of `shape` with about n_moves moves."""
-    return "\n".join(_BUILDERS[shape](n_moves)) + "\n"
+    newline = _NEWLINES.get(shape, "\n")
+    return "\n".join(_BUILDERS[shape](n_moves)).replace("\n", newline) + newline
 
 
 @functools.lru_cache(maxsize=16)
 def _lines_per_move(shape: str) -> float:
-    return odd_moves(shape, 1000).count("\n") / 1000
+    return odd_moves(shape, 1000).count(_NEWLINES.get(shape, "\n")) / 1000
 
 
 def odd_program(shape: str, lines: int) -> str:
