@@ -134,7 +134,9 @@ class Declarations:
         """The program's own module-level global declarations that one of these modules
         declares too, each as 'name (module M of file)': a task holding both does not
         load on the controller."""
-        found = []
+        found: list[str] = []
+        if not self._global:  # no declaration file nor other module: nothing to compare
+            return found
         for decl in program.declarations:
             if decl.routine is None and not decl.local:
                 other = self._global.get(decl.key)

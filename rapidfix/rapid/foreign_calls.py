@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rapidfix.rapid import syntax as s
-from rapidfix.rapid.instructions import NON_MOVING_PROCEDURES, motion_spec
+from rapidfix.rapid.instructions import NON_MOVING_PROCEDURES
 from rapidfix.rapid.program import Program
 from rapidfix.rapid.values import TARGET_TYPES, fits_type
 
@@ -52,29 +52,23 @@ def foreign_target_calls(program: Program) -> list[ForeignCall]:
     rapidfix knows nor a routine of this program (nor one known to take targets without
     moving to them, `instructions.NON_MOVING_PROCEDURES`), and that passes a robtarget or a
     jointtarget (a named one, `Offs`/`RelTool` of one, or one written inline)."""
-    routines = [item for module in program.syntax.modules for item in module.items
-                if isinstance(item, s.Routine)]
-    own = {r.name.lower() for r in routines}
-    foreign: dict[str, bool] = {}  # call name -> neither a motion nor the program's own
+    own = {item.name.lower() for module in program.syntax.modules for item in module.items
+           if isinstance(item, s.Routine)}
+    foreign: dict[str, bool] = {}  # call name -> not a routine of the program's own
     found: list[ForeignCall] = []
     text = program.text
-    for routine in routines:
-        for body in [routine.body] + [h.body for h in routine.handlers]:
-            for statement, _ in s.walk_statements(body):
-                if not isinstance(statement, s.ProcedureCall):
-                    continue
-                name = statement.name
-                other = foreign.get(name)
-                if other is None:
-                    key = name.lower()
-                    other = foreign[name] = (motion_spec(name) is None and key not in own
-                                             and key not in NON_MOVING_PROCEDURES)
-                if not other:
-                    continue
-                targets = tuple(text[a.value.start:a.value.end] for a in statement.args
-                                if _is_target(a.value, program, routine))
-                if targets:
-                    found.append(ForeignCall(name, statement.start, targets))
+    for statement, routine in program.other_calls:  # the calls of no motion instruction
+        name = statement.name
+        other = foreign.get(name)
+        if other is None:
+            key = name.lower()
+            other = foreign[name] = key not in own and key not in NON_MOVING_PROCEDURES
+        if not other:
+            continue
+        targets = tuple(text[a.value.start:a.value.end] for a in statement.args
+                        if _is_target(a.value, program, routine))
+        if targets:
+            found.append(ForeignCall(name, statement.start, targets))
     found.sort(key=lambda call: call.start)
     return found
 

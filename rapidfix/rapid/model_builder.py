@@ -283,6 +283,8 @@ class ModelBuilder:
         spec, positions, names = known
         if spec is not None:
             self.pending.append((call, spec, module, routine.name, in_loop))
+        else:
+            self.program.other_calls.append((call, routine))
         if not positions and not names:
             return
         how = f"written by {call.name}"

@@ -259,6 +259,10 @@ class Program:
     declarations: list[Declaration] = field(default_factory=list)
     routines: list[RoutineInfo] = field(default_factory=list)
     motions: list[MotionInstruction] = field(default_factory=list)
+    #: the procedure calls that are not motion instructions, each with its routine, in
+    #: the order of the routines and their bodies (the model builder's walk)
+    other_calls: list[tuple[s.ProcedureCall, s.Routine]] = field(default_factory=list,
+                                                                 repr=False)
     _by_name: dict[str | None, dict[str, Declaration]] | None = field(default=None, repr=False)
     _indexed: int = field(default=0, repr=False)
 
