@@ -165,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
         Compensator,
         modules_beside,
         rewrite_file,
+        unread_task_modules,
         with_task_modules,
     )
 
@@ -178,19 +179,21 @@ def run(args: argparse.Namespace) -> int:
     else:
         target = check_output_file(args.output, inputs=[source])
     options = options_from_args(args)
+    unread: list[tuple[str, str]] = []
     try:
         comp = Compensator.load(args.model, args.robot, args.robot_file, args.decls)
         task = None if args.no_task_modules else modules_beside(source)
         if task is not None and task[1]:
-            comp = with_task_modules(comp, [(str(m), str(m)) for m in task[1]])
+            modules = [(str(m), str(m)) for m in task[1]]
+            comp = with_task_modules(comp, modules)
             used = len(comp.decl_paths) - len(args.decls)
             if used:
                 print(f"declarations also read from {used} other module(s) of its task "
                       f"({task[0]})")
-            if used < len(task[1]):
-                print(f"rapidfix: warning: {len(task[1]) - used} module(s) of its task "
-                      f"({task[0]}) not read: they do not parse or are compensated programs",
-                      file=sys.stderr)
+            unread = unread_task_modules(modules)
+            for name, why in unread:  # what they declare is unknown to this program
+                print(f"rapidfix: warning: {name}: this module of the task is not read for "
+                      f"its declarations: {why}", file=sys.stderr)
         result = rewrite_file(source, target, comp, options, in_place=args.in_place)
     except RapidfixError as err:
         reword(err)
@@ -206,4 +209,4 @@ def run(args: argparse.Namespace) -> int:
         print(f"rapidfix: error: {len(result.skipped)} target(s) cannot be compensated "
               "(--strict): nothing written", file=sys.stderr)
         return 1
-    return 3 if result.skipped or result.warnings else 0
+    return 3 if result.skipped or result.warnings or unread else 0

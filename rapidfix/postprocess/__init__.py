@@ -39,7 +39,11 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.postprocess.batch import RAPID_SUFFIXES, BatchSettings, run_batch, write_summary
     from rapidfix.postprocess.emission_forms import robtarget_literals
     from rapidfix.postprocess.execute import Execution, align_axis1, commanded_motions
-    from rapidfix.postprocess.task_modules import modules_beside, with_task_modules
+    from rapidfix.postprocess.task_modules import (
+        modules_beside,
+        unread_task_modules,
+        with_task_modules,
+    )
 
 # The other exports, name -> module of this package: each is imported from its module on
 # first use (PEP 562), so exporting a name costs nothing until it is used.
@@ -53,6 +57,7 @@ LAZY_EXPORTS = {
     "modules_beside": "task_modules",
     "robtarget_literals": "emission_forms",
     "run_batch": "batch",
+    "unread_task_modules": "task_modules",
     "with_task_modules": "task_modules",
     "write_summary": "batch",
 }
@@ -72,6 +77,7 @@ __all__ = [
     "rewrite_source",
     "robtarget_literals",
     "run_batch",
+    "unread_task_modules",
     "with_task_modules",
     "write_summary",
 ]

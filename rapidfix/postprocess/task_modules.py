@@ -152,28 +152,43 @@ def task_snapshot(root: Path, neighbours: dict[PurePath, tuple[PurePath, ...]],
         yield lambda rel: str(Path(tmp) / rel)
 
 
-#: parsed task modules per worker process: (file read, size, mtime) -> program, or None
-#: when the module is not used (see `_parsed`)
-_PARSED: dict[tuple[str, int, int], object | None] = {}
+#: parsed task modules per worker process: (file read, size, mtime) -> program, or why
+#: the module is not used (see `_read`)
+_PARSED: dict[tuple[str, int, int], object] = {}
 
 
-def _parsed(name: str, read_from: str) -> object | None:
-    """The module's program, or None when it does not parse (its own job reports why)
-    or carries a compensated program's header: its targets may already be compensated,
-    and a second compensation through them would be wrong without a word."""
+def _read(name: str, read_from: str) -> object:
+    """The module's program, or why it is not used (a str): it cannot be read, it does
+    not parse (its own job reports why), or it carries a compensated program's header:
+    its targets may already be compensated, and a second compensation through them
+    would be wrong without a word."""
     from rapidfix.rapid import parse_program
 
     try:
         stat = Path(read_from).stat()
-        key = (read_from, stat.st_size, stat.st_mtime_ns)
-        if key not in _PARSED:
-            _PARSED[key] = None
+    except OSError as err:
+        return f"cannot be read ({err.strerror or err})"
+    key = (read_from, stat.st_size, stat.st_mtime_ns)
+    if key not in _PARSED:
+        try:
             data = Path(read_from).read_bytes()
-            if read_header(data.decode("latin-1")) is None:
+            if read_header(data.decode("latin-1")) is not None:
+                _PARSED[key] = "it is a compensated program"
+            else:
                 _PARSED[key] = parse_program(data, name)
-    except (RapidfixError, OSError):
-        return None
+        except OSError as err:
+            _PARSED[key] = f"cannot be read ({err.strerror or err})"
+        except RapidfixError as err:
+            where = (f"line {err.line}" if err.column is None
+                     else f"line {err.line}, column {err.column}") if err.line else ""
+            _PARSED[key] = f"it does not parse ({where}{': ' if where else ''}{err.message})"
     return _PARSED[key]
+
+
+def unread_task_modules(modules: Sequence[tuple[str, str]]) -> list[tuple[str, str]]:
+    """(name, why) of each module `with_task_modules` leaves out, in the same order."""
+    return [(name, found) for name, read_from in modules
+            if isinstance(found := _read(name, read_from), str)]
 
 
 def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> Compensator:
@@ -182,8 +197,8 @@ def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> 
     or a copy taken before an in-place batch rewrites it)."""
     programs, used = [], []
     for name, read_from in modules:
-        program = _parsed(name, read_from)
-        if program is not None:
+        program = _read(name, read_from)
+        if not isinstance(program, str):
             programs.append(program)
             used.append(name)
     if not programs:
@@ -192,4 +207,5 @@ def with_task_modules(comp: Compensator, modules: Sequence[tuple[str, str]]) -> 
 
 
 __all__ = ["RAPID_SUFFIXES", "is_rapid", "modules_beside", "program_modules", "task_folder",
-           "task_neighbours", "task_snapshot", "with_task_modules"]
+           "task_neighbours", "task_snapshot", "unread_task_modules",
+           "with_task_modules"]

@@ -216,5 +216,28 @@ def test_rewrite_says_when_a_module_of_its_task_is_not_read(cell, backup, tmp_pa
                  str(cell["model_path"]), "-o", str(tmp_path / "one.mod")]) == 3
     out, err = capsys.readouterr()
     assert "declarations also read" not in out
-    assert (f"rapidfix: warning: 1 module(s) of its task ({root / 'RAPID/TASK1'}) not read: "
-            "they do not parse or are compensated programs") in err
+    assert (f"rapidfix: warning: {calib}: this module of the task is not read for its "
+            "declarations: it does not parse (line ") in err
+
+
+def test_an_unread_module_of_the_task_alone_gives_exit_status_3(cell, backup, tmp_path,
+                                                                  capsys):
+    """A module of the task left unread (here a compensated program: its targets may be
+    compensated already) is named with the reason, and the exit status says a warning
+    was given, also when the program itself moves nowhere."""
+    root, _ = backup
+    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
+    lines = calib.read_text().splitlines(keepends=True)
+    lines.insert(1, "  ! rapidfix-compensated version: rapidfix 0.1.0\n")
+    calib.write_text("".join(lines))
+    idle = root / "RAPID/TASK1/PROGMOD/Idle.mod"
+    idle.write_text('MODULE Idle\n  PROC wait()\n    WaitTime 1;\n  ENDPROC\nENDMODULE\n')
+    assert main(["rewrite", str(idle), "--model", str(cell["model_path"]),
+                 "-o", str(tmp_path / "idle.mod")]) == 3
+    err = capsys.readouterr().err
+    assert (f"rapidfix: warning: {calib}: this module of the task is not read for its "
+            "declarations: it is a compensated program") in err
+    calib.write_text("".join(lines[:1] + lines[2:]))  # read again: nothing to say
+    assert main(["rewrite", str(idle), "--model", str(cell["model_path"]),
+                 "-o", str(tmp_path / "idle.mod"), "--force"]) == 0
+    assert "warning" not in capsys.readouterr().err
