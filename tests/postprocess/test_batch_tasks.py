@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import re
-from pathlib import PurePath
+from pathlib import Path, PurePath
 
 import pytest
 
@@ -117,15 +117,19 @@ def test_an_ambiguous_or_local_name_in_the_task_is_named(cell, backup, tmp_path)
                            and "and in module Spare of" in s for s in skipped), skipped
 
 
+def _mark_compensated(module: Path) -> None:
+    """Give a module the header line of a compensated output."""
+    lines = module.read_text().splitlines(keepends=True)
+    lines.insert(1, "  ! rapidfix-compensated version: rapidfix 0.1.0\n")
+    module.write_text("".join(lines))
+
+
 def test_a_compensated_module_lends_nothing(cell, backup, tmp_path):
     """A module of the task that is itself a compensated output (its targets may be
     compensated already) is not read for declarations: what it declares stays unknown
     rather than compensated twice."""
     root, _ = backup
-    calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
-    lines = calib.read_text().splitlines(keepends=True)
-    lines.insert(1, "  ! rapidfix-compensated version: rapidfix 0.1.0\n")
-    calib.write_text("".join(lines))
+    _mark_compensated(root / "RAPID/TASK1/SYSMOD/CalibData.sys")
     out = tmp_path / "out"
     assert main(_args(root, cell["model_path"], str(out), "--force")) == 3
     results = json.loads((out / "rapidfix-batch.json").read_text())["results"]
@@ -227,9 +231,8 @@ def test_an_unread_module_of_the_task_alone_gives_exit_status_3(cell, backup, tm
     was given, also when the program itself moves nowhere."""
     root, _ = backup
     calib = root / "RAPID/TASK1/SYSMOD/CalibData.sys"
-    lines = calib.read_text().splitlines(keepends=True)
-    lines.insert(1, "  ! rapidfix-compensated version: rapidfix 0.1.0\n")
-    calib.write_text("".join(lines))
+    text = calib.read_text()
+    _mark_compensated(calib)
     idle = root / "RAPID/TASK1/PROGMOD/Idle.mod"
     idle.write_text('MODULE Idle\n  PROC wait()\n    WaitTime 1;\n  ENDPROC\nENDMODULE\n')
     assert main(["rewrite", str(idle), "--model", str(cell["model_path"]),
@@ -237,7 +240,7 @@ def test_an_unread_module_of_the_task_alone_gives_exit_status_3(cell, backup, tm
     err = capsys.readouterr().err
     assert (f"rapidfix: warning: {calib}: this module of the task is not read for its "
             "declarations: it is a compensated program") in err
-    calib.write_text("".join(lines[:1] + lines[2:]))  # read again: nothing to say
+    calib.write_text(text)  # as it was: read again, nothing to say
     assert main(["rewrite", str(idle), "--model", str(cell["model_path"]),
                  "-o", str(tmp_path / "idle.mod"), "--force"]) == 0
     assert "warning" not in capsys.readouterr().err
