@@ -78,11 +78,11 @@ class SourceText:
     def encode(self, text: str | None = None) -> bytes:
         """Bytes of `text` (default: the original text) in the file's encoding, BOM first."""
         body = self.text if text is None else text
-        if self.newline == "\r":  # read with LF (see `_source_text`): written with CR
-            body = body.replace("\n", "\r")
+        # read with LF where the file has a lone CR (see `_source_text`): written with CR
+        written = body.replace("\n", "\r") if self.newline == "\r" else body
         try:
-            return self.bom + body.encode(self.encoding)
-        except UnicodeEncodeError as err:
+            return self.bom + written.encode(self.encoding)
+        except UnicodeEncodeError as err:  # (the same offsets in `body`, counted by LF)
             line, column = self._position_in(body, err.start)
             raise RapidSyntaxError(
                 f"character {body[err.start]!r} cannot be written in the file's "
@@ -136,7 +136,8 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
     else:
         bad = _first_binary_byte(body)
         if bad >= 0:
-            line = body.count(b"\n", 0, bad) + 1
+            ending = b"\n" if b"\n" in body or b"\r" not in body else b"\r"  # (lone CRs)
+            line = body.count(ending, 0, bad) + 1
             looks = (" (it looks like UTF-16 without a byte-order mark, but does not decode "
                      "as UTF-16)" if body[bad] == 0 and _half_zero(body) else "")
             raise RapidSyntaxError(
