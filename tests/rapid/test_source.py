@@ -64,10 +64,10 @@ def test_lone_cr_lines_are_read_as_lines():
     with pytest.raises(RapidSyntaxError) as err:  # a binary byte: its line too
         parse_program(text.replace("VAR num b;", "VAR num b;\x01").encode(), "cr.mod")
     assert err.value.line == 4
+    legacy = text.replace("a comment", "Schweißnaht")  # not UTF-8: CP1252
+    source = decode_source(legacy.encode("cp1252"))
+    assert source.encoding == "cp1252" and source.newline == "\r"
     with pytest.raises(RapidSyntaxError) as err:  # a character the encoding lacks
-        legacy = text.replace("a comment", "Schweißnaht")  # not UTF-8: CP1252
-        source = decode_source(legacy.encode("cp1252"))
-        assert source.encoding == "cp1252" and source.newline == "\r"
         source.encode(source.text.replace("num b", "num \u4e00"))
     assert (err.value.line, err.value.column) == (4, 11)
     # one LF anywhere: the file's CRs are not line ends but whitespace, as the grammar says
