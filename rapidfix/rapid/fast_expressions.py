@@ -167,14 +167,20 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
             "condition": condition}
 
 
-def condition_pattern(name: str) -> str:
+def condition_pattern(name: str, stop: str | None = None) -> str:
     """The text of a condition (rapid.lark's `expr`, or a comma-separated list of them),
     up to the keyword its statement puts after it: strings, optional arguments'
     `\\Name:=` (`name` the pattern of Name), and any character but those of a comment,
     a statement's end, a conditional or named argument (`\\A?B`, `f(x:=1)`) or a
-    placeholder (`<EXP>`), taken as few as can be. The reader checks all of it."""
-    return (rf"(?:{STRING}|\\{WS}*{name}{WS}*:=|[^;!\"?:<]"
-            rf"|<(?![A-Za-z]+>))+?")
+    placeholder (`<EXP>`), taken as few as can be. The reader checks all of it.
+
+    With `stop`, no piece of the condition starts with what `stop` matches: a pattern
+    that goes on after the keyword (an IF block's) cannot then take the keyword into
+    the condition to find its own end further on."""
+    piece = rf"(?:{STRING}|\\{WS}*{name}{WS}*:=|[^;!\"?:<]|<(?![A-Za-z]+>))"
+    if stop is None:
+        return piece[:-1] + ")+?"  # the same text as before `stop` was known
+    return rf"(?:(?!{stop}){piece})+?"
 
 
 # What the reader takes without reading it again: the values fastpath reads itself

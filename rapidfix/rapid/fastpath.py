@@ -29,7 +29,10 @@ be TRUE or FALSE, a string (`TPWrite "Point 1, reached; ok"`, also in sums, call
 parentheses: `"Count: " + NumToStr(n,0)`), or a condition (`WaitUntil di1 = 1 AND NOT
 bStop`). Anything else in a statement — a comment inside it, another keyword, a named
 or conditional argument, calls nested deeper — ends the run, and that statement is
-parsed by the full grammar as before.
+parsed by the full grammar as before. A run also takes an IF block whose branch holds
+such calls only, written on the line of its THEN, `IF c THEN <calls> ENDIF` (no ELSE,
+nothing nested): hand-written cells guard moves and signals that way, and each such
+block cost the LALR parser three tokens and their reductions.
 
 More terminals take the head of a compound statement whole (head_patterns):
 `IF c THEN`, `ELSEIF c THEN`, `WHILE c DO`, `FOR v FROM a TO b [STEP s] DO`, `TEST e`,
@@ -188,7 +191,14 @@ def _patterns() -> dict[str, str]:
     dims = rf"\{{{WS}*{dim}(?:{WS}*,{WS}*{dim})*{WS}*\}}"
     decl = (f"(?i:(?:LOCAL{WS}+)?(?:TASK{WS}+)?(?:VAR|PERS|CONST)){WS}+{type_name}{WS}+"
             f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
-    return {"call": call, "decl": decl, **head_patterns(expression["condition"], False)}
+    # an IF block's head: its condition cannot take the THEN in (the block's pattern
+    # goes on after the THEN, and would otherwise find its ENDIF past an ELSEIF's THEN)
+    then = rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:THEN){_WORD_END}"
+    # (an ENDIF later on the line first: an IF over lines fails at once)
+    block_head = (rf"(?i:IF){_WORD_END}(?=[^\n]*(?i:ENDIF))"
+                  rf"{condition_pattern(plain_name, then)}{then}")
+    return {"call": call, "decl": decl, "block_head": block_head,
+            **head_patterns(expression["condition"], False)}
 
 
 def head_patterns(condition: str, groups: bool) -> dict[str, str]:
@@ -258,7 +268,12 @@ def grammar_extension(grammar: str) -> str:
         raise ValueError(f"rapid.lark no longer says {_BODY_RULE!r}; update fastpath")
     p = _patterns()
     # a run starts with a statement (the gap before the first matches nothing)
-    calls = f"(?={NAME_START})(?:{GAP}{p['call']}){{1,{RUN_LIMIT}}}"
+    # an IF block of calls on the line of its THEN is one statement of a run (split_calls
+    # builds its If node); an IF over lines fails here at its THEN's line end, before
+    # its body (which may hold an ELSE) is read twice
+    if_block = (f"{p['block_head']}(?:[ \t]*{p['call']}){{0,{RUN_LIMIT}}}[ \t]*(?i:ENDIF)"
+                f"{_WORD_END}")
+    calls = f"(?={NAME_START})(?:{GAP}(?:{p['call']}|{if_block})){{1,{RUN_LIMIT}}}"
     decls = f"(?={NAME_START})(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     heads = {kind: p[kind] for kind in _HEAD_RULES}
     if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
@@ -860,9 +875,13 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     shifted to where it stands, only when they are asked for. When the text after
     the first argument is new but the text after the second is known (MoveC's two
     targets, or any call whose second argument varies too), the call's tail is
-    taken after its second argument. Names are interned.
+    taken after its second argument. Names are interned. An IF block of calls (the
+    lexer has checked that it holds calls only and ends with its ENDIF, all on one line)
+    becomes the If node the grammar builds, its condition read as `_head_parts` reads a
+    FAST_IF head.
     """
     calls: list[s.Statement] = []
+    blocks: list[tuple[list[s.Statement], int, s.Expr]] = []  # the IF blocks open
     tails = _TAILS
     argument, lazy_call, intern = s.Argument, s.LazyCall, sys.intern
     head, find, piece_at = _CALL_HEAD.compiled.match, text.index, CALL_PIECE.compiled.match
@@ -870,6 +889,19 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     pos, size = 0, len(text)
     while pos < size:
         m = head(text, pos)
+        name = m.group(1)
+        if len(name) in (2, 5) and name[0] in "IiEe":  # (no call has a keyword's name)
+            word = name.upper()
+            if word == "IF":
+                block = _head_splitters()["if"].match(text, m.start(1))
+                blocks.append((calls, base + m.start(1), _condition(block, base)))
+                calls, pos = [], block.end()
+                continue
+            if word == "ENDIF":
+                outer, start, condition = blocks.pop()
+                outer.append(s.If(start, base + m.end(1), [(condition, calls)], None))
+                calls, pos = outer, m.end(1)
+                continue
         first = m.group(2)
         tail_at = m.end()
         pos = find(";", tail_at) + 1
@@ -934,9 +966,19 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
         last = head_arg if second_arg is None else second_arg
         if last is not None and last.end == shift:  # one int object, not two equal ones
             shift = last.end
-        calls.append(lazy_call(base + m.start(1), base + pos, intern(m.group(1)), head_arg,
+        calls.append(lazy_call(base + m.start(1), base + pos, intern(name), head_arg,
                                tail, shift, second_arg, lead))
+    if blocks:  # pragma: no cover - the lexer takes an IF block with its ENDIF only
+        raise NotFast(text[:40])
     return calls
+
+
+def _condition(head: re.Match[str], base: int) -> s.Expr:
+    """The condition of an IF head matched by the "if" head splitter in a token at
+    `base`, read as `_head_parts` reads that of a FAST_IF token."""
+    text = head.group(1)
+    value = text.strip(_WS_CHARS)
+    return _read(value, base + head.start(1) + len(text) - len(text.lstrip(_WS_CHARS)))
 
 
 def _head_node(text: str, at: int) -> s.Expr:

@@ -209,9 +209,12 @@ class _Reader:
     def calls(self, run_text: str, module: str, routine: str) -> bool:
         if "(" in run_text:  # a function call among the values (or in a comment): an
             return False     # expression, which the bulk reader leaves to the full route
+        found = _BULK_CALL.findall(run_text)
+        if any(len(name) in (2, 5) and name.upper() in ("IF", "ENDIF") for name, _, _ in found):
+            return False  # an IF block in the run: its calls are the full route's to read
         calls = self.program.calls
         self.program.runs.append((len(calls), module, routine))
-        calls.extend(_BULK_CALL.findall(run_text))
+        calls.extend(found)
         return True
 
     def body(self, items: list[Any], text: str, module: str, routine: str) -> bool:

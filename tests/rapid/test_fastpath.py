@@ -403,6 +403,11 @@ def test_a_grouped_value_reads_the_rest_once():
 
 PIECES = [
     "MoveL p1,v100,z1,tool0;",
+    "IF a THEN MoveL p1,v100,z1,tool0; Set do1; ENDIF",  # IF blocks: in a run when of calls
+    "if n > 1 then\n ! c\n x := 1;\nendif",
+    "IF b THEN ENDIF",
+    "IF a THEN Foo; ELSE Bar; ENDIF",
+    "IF a THEN IF b THEN Foo; ENDIF ENDIF",
     "MoveL p2, v200, fine, tool0 \\WObj:=w;",
     "Stop;",
     f"MoveJ {TARGET},v100,z1,tool0;",

@@ -21,7 +21,7 @@ from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NotRead, read_expression
-from rapidfix.rapid.fastpath import fast_parser
+from rapidfix.rapid.fastpath import RUN_LIMIT, fast_parser
 
 
 def fast_tokens(text: str) -> list[str]:
@@ -280,3 +280,45 @@ def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_gramma
         assert shape(fast.args) == shape(general.args)
     assert_parses_as_plain(routine(f"MoveL {text},v100,z1,tool0\\WObj:=w;",
                                    f"MoveL {text}, v100, z1, tool0;"))
+
+
+# ------------------------------------------------ IF blocks of calls inside a run
+@pytest.mark.parametrize(("text", "tokens"), [
+    (routine("MoveL p0,v100,z1,tool0;", "IF bOn THEN MoveL p1,v100,z1,tool0; Set do1; ENDIF",
+             "MoveL p2,v100,z1,tool0;"), ["FAST_CALLS"]),
+    (routine("IF bOn THEN x := x + 1; Reset do1; ENDIF ! the gripper"), ["FAST_CALLS"]),
+    (routine("IF bOn THEN MoveL p1, v100, z1, tool0; ! down ENDIF", "ENDIF"),
+     ["FAST_IF", "FAST_CALLS"]),
+    # over lines: the head is a token of its own, its body a run
+    (routine("IF bOn THEN", "  ! the gripper", "  MoveL p1, v100, z1, tool0; ! down",
+             "  x := x + 1;", "ENDIF"), ["FAST_IF", "FAST_CALLS"]),
+    (routine("if n>2 AND NOT bStop then movel p1,v100,z1,tool0; endif"), ["FAST_CALLS"]),
+    (routine('IF s = "THEN" THEN TPWrite "ENDIF;"; ENDIF'), ["FAST_CALLS"]),
+    (routine("IF a THEN MoveL p1,v100,z1,tool0; ENDIF IF b THEN ENDIF Stop;"), ["FAST_CALLS"]),
+    (routine("IF Ñ{1} = 1 THEN n := n + 1; ENDIF"), ["FAST_CALLS"]),
+    # not calls only: the IF head is a token of its own, as before
+    (routine("IF a THEN", "  MoveL p1,v100,z1,tool0;", "ELSEIF b THEN", "ENDIF"),
+     ["FAST_IF", "FAST_CALLS", "FAST_ELSEIF"]),
+    (routine("IF a THEN Foo; ELSE Bar; ENDIF"), ["FAST_IF", "FAST_CALLS", "FAST_CALLS"]),
+    (routine("IF a THEN IF b THEN Foo; ENDIF ENDIF"), ["FAST_IF", "FAST_CALLS"]),
+    (routine("IF a THEN WHILE b DO ENDWHILE ENDIF"), ["FAST_IF", "FAST_WHILE"]),
+    (routine("IF a THEN " + "Foo; " * (RUN_LIMIT + 1) + "ENDIF"),
+     ["FAST_IF", "FAST_CALLS", "FAST_CALLS"]),
+])
+def test_an_if_block_of_calls_is_a_statement_of_the_run(text, tokens):
+    """`IF c THEN <calls> ENDIF` on the line of its THEN (no ELSE, nothing nested, at most
+    RUN_LIMIT calls) is read in the run of calls around it, as the If node the grammar
+    builds; any other IF keeps its head token."""
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert fast_tokens(text) == ["FAST_PROC", *tokens]
+
+
+def test_a_run_holding_an_if_block_is_left_to_the_full_read_back():
+    """The bulk reader reads runs of plain calls; a run holding an IF block goes the full
+    route (the read-back then finds the moves inside it as the model does)."""
+    from rapidfix.rapid.readback import read_bulk
+
+    plain = routine("MoveL p1,v100,z1,tool0;", "MoveL p2,v100,z1,tool0;")
+    assert [c[0] for c in read_bulk(plain).calls] == ["MoveL", "MoveL"]
+    assert read_bulk(routine("MoveL p1,v100,z1,tool0;",
+                             "IF a THEN MoveL p2,v100,z1,tool0; ENDIF")) is None
