@@ -976,9 +976,15 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
 def _condition(head: re.Match[str], base: int) -> s.Expr:
     """The condition of an IF head matched by the "if" head splitter in a token at
     `base`, read as `_head_parts` reads that of a FAST_IF token."""
-    text = head.group(1)
-    value = text.strip(_WS_CHARS)
-    return _read(value, base + head.start(1) + len(text) - len(text.lstrip(_WS_CHARS)))
+    return _read(*_stripped_group(head, 1, base))
+
+
+def _stripped_group(m: re.Match[str], index: int, base: int) -> tuple[str, int]:
+    """Group `index` of a head splitter's match in a token at `base`, without the
+    whitespace around it, and the offset where it then starts."""
+    text = m.group(index)
+    return (text.strip(_WS_CHARS),
+            base + m.start(index) + len(text) - len(text.lstrip(_WS_CHARS)))
 
 
 def _head_node(text: str, at: int) -> s.Expr:
@@ -1221,8 +1227,7 @@ def _head_parts(head: Token, kind: str) -> list[Any]:
         elif kind == "for" and index == 1:
             parts.append(text)
         else:
-            value = text.strip(_WS_CHARS)
-            start = head.start_pos + m.start(index) + len(text) - len(text.lstrip(_WS_CHARS))
+            value, start = _stripped_group(m, index, head.start_pos)
             if kind != "case":
                 parts.append(_read(value, start))
                 continue
