@@ -104,14 +104,14 @@ class _TakeUp:
     """
 
     def __init__(self, play: np.ndarray, context: Context, from_row: np.ndarray,
-                 q_start: np.ndarray, absj: dict[int, np.ndarray]) -> None:
+                 q_start: np.ndarray, absj_rows: np.ndarray) -> None:
         self.play = play
         self.active = context.last_direction is not None and bool(np.any(play > 0))
         self.start_dir = np.zeros((len(from_row), 6))
         if context.last_direction is not None:
             self.start_dir = np.asarray(context.last_direction, dtype=float)[from_row].copy()
-            if absj:  # a MoveAbsJ start: its direction is not followed here
-                self.start_dir[np.fromiter(absj, dtype=int, count=len(absj))] = 0.0
+            # a MoveAbsJ start: its direction is not followed here
+            self.start_dir[absj_rows] = 0.0
         self.q_start = q_start
 
     def __call__(self, ctx: Context, seg: np.ndarray, q: np.ndarray) -> Context:
@@ -190,6 +190,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     # segment -> the joints of the MoveAbsJ it follows (segments are in site order)
     at = np.searchsorted(seg_sites, np.fromiter(starts, dtype=np.int64, count=len(starts)))
     absj = {int(k): starts[i] for k, i in sorted(zip(at.tolist(), starts))}
+    absj_rows = np.fromiter(absj, dtype=np.int64, count=len(absj))  # their segments
     if not segs:
         return PathRefinement(planned.solved, mode, filtered_reason, segs)
     to_row, via_row = last_row[seg_sites], first_row[seg_sites]
@@ -197,7 +198,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     q0i, q0c = p.q_ideal[from_row], p.q_cmd[from_row]
     start_flange = p.flange[from_row]  # the previous target's intended tool0 pose
     if absj:
-        at = np.fromiter(absj, dtype=int, count=len(absj))
+        at = absj_rows
         q0i[at] = q0c[at] = np.array(list(absj.values()))
         start_flange[at] = robot.fk(q0i[at])
     frames = t.placement.take(to_row)
@@ -206,7 +207,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     # points between two targets run in the destination's conditions: its payload,
     # and each joint moving the way it moves into the destination
     seg_ctx = p.context.take(to_row)
-    take_up = _TakeUp(model.play(), p.context, from_row, q0c, absj)
+    take_up = _TakeUp(model.play(), p.context, from_row, q0c, absj_rows)
 
     def predict(seg: np.ndarray, q: np.ndarray) -> np.ndarray:
         flange = model.actual_flange(robot, q, take_up(seg_ctx.take(seg), seg, q))
@@ -224,7 +225,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     # closed by any number of points: given up before it is split
     off = np.zeros(len(segs), dtype=bool)
     if absj:
-        rows = np.fromiter(absj, dtype=np.int64, count=len(absj))
+        rows = absj_rows
         off[rows] = curves.distance(rows, predict(rows, q0c[rows])) > path_tolerance_mm
     points = refine(curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
                     path_tolerance_mm, predict, solve, bound, given_up=off)

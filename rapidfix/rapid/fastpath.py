@@ -193,12 +193,17 @@ def _patterns() -> dict[str, str]:
             f"{data_name}{WS}*(?:{dims}{WS}*)?(?::={WS}*{value}{WS}*)?;")
     # an IF block's head: its condition cannot take the THEN in (the block's pattern
     # goes on after the THEN, and would otherwise find its ENDIF past an ELSEIF's THEN)
-    then = rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:THEN){_WORD_END}"
+    then = _keyword("THEN")
     # (an ENDIF later on the line first: an IF over lines fails at once)
     block_head = (rf"(?i:IF){_WORD_END}(?=[^\n]*(?i:ENDIF))"
                   rf"{condition_pattern(plain_name, then)}{then}")
     return {"call": call, "decl": decl, "block_head": block_head,
             **head_patterns(expression["condition"], False)}
+
+
+def _keyword(words: str) -> str:
+    """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
+    return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
 
 
 def head_patterns(condition: str, groups: bool) -> dict[str, str]:
@@ -209,20 +214,16 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     c = f"({condition})" if groups else condition
     name = f"({NAME}){_WORD_END}" if groups else f"{NAME}{_WORD_END}"
 
-    def keyword(words: str) -> str:
-        """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
-        return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
-
     return {
-        "if": rf"(?i:IF){_WORD_END}{c}{keyword('THEN')}",
-        "elseif": rf"(?i:ELSEIF){_WORD_END}{c}{keyword('THEN')}",
-        "while": rf"(?i:WHILE){_WORD_END}{c}{keyword('DO')}",
-        "for": (rf"(?i:FOR){_WORD_END}{WS}*{name}{WS}*(?i:FROM){_WORD_END}{c}{keyword('TO')}"
-                rf"{c}(?:{keyword('STEP')}{c})?{keyword('DO')}"),
+        "if": rf"(?i:IF){_WORD_END}{c}{_keyword('THEN')}",
+        "elseif": rf"(?i:ELSEIF){_WORD_END}{c}{_keyword('THEN')}",
+        "while": rf"(?i:WHILE){_WORD_END}{c}{_keyword('DO')}",
+        "for": (rf"(?i:FOR){_WORD_END}{WS}*{name}{WS}*(?i:FROM){_WORD_END}{c}{_keyword('TO')}"
+                rf"{c}(?:{_keyword('STEP')}{c})?{_keyword('DO')}"),
         # (up to its first clause, which stays a token of its own: a token split is
         # that far already)
         "test": rf"(?i:TEST){_WORD_END}{c}"
-                + ("" if groups else f"(?={keyword('CASE|DEFAULT|ENDTEST')})"),
+                + ("" if groups else f"(?={_keyword('CASE|DEFAULT|ENDTEST')})"),
         "case": rf"(?i:CASE){_WORD_END}{c}:",
         "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
         # a procedure without parameters, up to its body (`LOCAL PROC Path_10()`)
@@ -741,6 +742,9 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
     return _moved(template, start - template.start)
 
 
+#: the keywords that open and close an IF block in a run of calls (split_calls)
+BLOCK_WORDS = frozenset({"IF", "ENDIF"})
+
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
 _CALL_HEAD = LazyPattern(rf"{GAP}({NAME})(?:{WS}+({VALUE_TEXT}))?")
@@ -891,7 +895,7 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
         m = head(text, pos)
         name = m.group(1)
         if len(name) in (2, 5) and name[0] in "IiEe":  # (no call has a keyword's name)
-            word = name.upper()
+            word = name.upper()  # one of BLOCK_WORDS, or a call's name
             if word == "IF":
                 block = _head_splitters()["if"].match(text, m.start(1))
                 blocks.append((calls, base + m.start(1), _condition(block, base)))

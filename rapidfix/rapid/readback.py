@@ -43,6 +43,7 @@ from rapidfix.exceptions import RapidSemanticError
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NAME
 from rapidfix.rapid.fastpath import (
+    BLOCK_WORDS,
     CALL_PIECE,
     GAP,
     TAIL_LIMIT,
@@ -210,7 +211,7 @@ class _Reader:
         if "(" in run_text:  # a function call among the values (or in a comment): an
             return False     # expression, which the bulk reader leaves to the full route
         found = _BULK_CALL.findall(run_text)
-        if any(len(name) in (2, 5) and name.upper() in ("IF", "ENDIF") for name, _, _ in found):
+        if any(name.upper() in BLOCK_WORDS for name, _, _ in found):
             return False  # an IF block in the run: its calls are the full route's to read
         calls = self.program.calls
         self.program.runs.append((len(calls), module, routine))

@@ -105,11 +105,17 @@ def dominant_newline(text: str) -> str:
     return "\r\n" if crlf > lf else "\n"
 
 
+def _lone_cr(body: str | bytes) -> bool:
+    """Whether every line of a file's text (or bytes) ends in a lone CR: CR and no LF."""
+    cr, lf = ("\r", "\n") if isinstance(body, str) else (b"\r", b"\n")
+    return cr in body and lf not in body  # type: ignore[operator]
+
+
 def _source_text(text: str, filename: str, encoding: str, bom: bytes) -> SourceText:
     """A SourceText of decoded `text`. A file whose lines end in a lone CR (old Mac
     editors) and never in LF is read with LF: its comments then end where its lines
     do and its lines are counted as an editor shows them; `encode` writes CR again."""
-    if "\r" in text and "\n" not in text:
+    if _lone_cr(text):
         return SourceText(text.replace("\r", "\n"), filename, encoding, bom, "\r")
     return SourceText(text, filename, encoding, bom, dominant_newline(text))
 
@@ -136,8 +142,7 @@ def decode_source(data: bytes | str, filename: str = "<string>") -> SourceText:
     else:
         bad = _first_binary_byte(body)
         if bad >= 0:
-            ending = b"\n" if b"\n" in body or b"\r" not in body else b"\r"  # (lone CRs)
-            line = body.count(ending, 0, bad) + 1
+            line = body.count(b"\r" if _lone_cr(body) else b"\n", 0, bad) + 1
             looks = (" (it looks like UTF-16 without a byte-order mark, but does not decode "
                      "as UTF-16)" if body[bad] == 0 and _half_zero(body) else "")
             raise RapidSyntaxError(
