@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
             continue
         if not args.quiet:
             modules = ", ".join(m.name for m in program.modules)
-            print(f"{name}: ok ({len(program.text.splitlines())} lines, module {modules}, "
+            print(f"{name}: ok ({program.source.line_count} lines, module {modules}, "
                   f"{len(program.declarations)} declarations, "
                   f"{len(program.motions)} motion instructions{_placeholders(program)})")
     if len(args.files) > 1 and not args.quiet:

@@ -109,10 +109,13 @@ class _StateWalk:
 
     def body(self, statements: list[Statement], state: Any, routine: str, depth: int) -> Any:
         """Walk one statement list from `state`; the state after it."""
+        index_of, record = self.index_of, self.record
         for statement in statements:
-            k = self.index_of.get(id(statement))
+            k = index_of.get(id(statement))
             if k is not None:
-                self.record[k] = self.join(self.record.get(k, state), state)
+                # a move met again in the same state (or met first) keeps it: no join
+                known = record.get(k, state)
+                record[k] = known if known == state else self.join(known, state)
                 continue
             nested = list(statement.bodies())
             if nested:
@@ -206,7 +209,7 @@ class _ConfWalk(_StateWalk):
     unknown: Monitoring = (None, None)
 
     def join(self, a: Any, b: Any) -> Any:
-        return tuple(x if x == y else None for x, y in zip(a, b))
+        return a if a == b else tuple(x if x == y else None for x, y in zip(a, b))
 
     def step(self, call: ProcedureCall, state: Any, routine: str) -> Any:
         slot = _MONITOR_CALLS.get(call.key)
@@ -244,13 +247,13 @@ def config_monitoring(program: Program) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(m, dtype=bool), np.ones(m, dtype=bool)
     walk = _ConfWalk(program)
     walk.run((True, True))
-    off = np.zeros(m, dtype=bool)
-    known = np.zeros(m, dtype=bool)
-    for k, motion in enumerate(program.motions):
-        state = walk.record.get(k, walk.unknown)
-        value = state[1 if motion.name.lower().startswith(_JOINT_MOVES) else 0]
-        off[k] = value is False
-        known[k] = value is not None
+    record, unknown, motions = walk.record, walk.unknown, program.motions
+    # the state's slot of each motion name (a program has a few): 1 ConfJ, 0 ConfL
+    slot = {name: int(name.lower().startswith(_JOINT_MOVES))
+            for name in {motion.name for motion in motions}}
+    values = [record.get(k, unknown)[slot[motion.name]] for k, motion in enumerate(motions)]
+    off = np.fromiter((value is False for value in values), dtype=bool, count=m)
+    known = np.fromiter((value is not None for value in values), dtype=bool, count=m)
     return off, known
 
 

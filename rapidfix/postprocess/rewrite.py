@@ -53,7 +53,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
 from rapidfix.postprocess.resolve import Declarations, Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_program
+from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_owned
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 #: programs of this much kernel work or more are solved with the compiled kernels (numba):
@@ -329,16 +329,24 @@ def rewrite_source(
     data: bytes, filename: str, comp: Compensator, options: RewriteOptions
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done."""
+    return _rewrite_owned([data], filename, comp, options)
+
+
+def _rewrite_owned(handed: list[bytes], filename: str, comp: Compensator,
+                   options: RewriteOptions) -> RewriteResult:
+    """`rewrite_source` of the bytes `handed` holds, taken out of it: when the caller
+    keeps no other reference, a large file's bytes are let go of once decoded."""
     with cyclic_gc_paused():
-        program = parse_program(data, filename)
+        digest = sha256_bytes(handed[0])
+        program = parse_owned(handed, filename)
         work = kernel_work(program)
         # _rewrite holds the only reference, so the program model is freed where it lets
         # it go (before the read-back), not after the collector is back on: then its
         # first collection would walk every object of the model once more
-        handed = [program]
+        models = [program]
         del program
         with _kernels_for(work):
-            return _rewrite(handed, data, filename, comp, options)
+            return _rewrite(models, digest, filename, comp, options)
 
 
 def kernel_work(program: Program) -> int:
@@ -365,9 +373,10 @@ def _kernels_for(work: int) -> Iterator[None]:
         yield
 
 
-def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensator,
+def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensator,
              options: RewriteOptions) -> RewriteResult:
-    """The steps after parsing; `handed` holds the program model, taken out here."""
+    """The steps after parsing; `handed` holds the program model, taken out here;
+    `digest` is the input's SHA-256."""
     program = handed.pop()
     old = read_header(program.text)
     if old is not None and not options.force:
@@ -403,7 +412,7 @@ def _rewrite(handed: list[Program], data: bytes, filename: str, comp: Compensato
         version=__version__,
         model_path=comp.model_path,
         model_sha256=comp.model_sha256,
-        input_sha256=sha256_bytes(data),
+        input_sha256=digest,
         options=header_options(options, comp),
         summary=summary,
         conditions=conditions,
@@ -474,11 +483,14 @@ def rewrite_file(
         raise OutputExistsError(
             "the output would overwrite the input", file=target,
             hint="choose another target, or pass in_place=True (keeps a backup)")
-    data = source.read_bytes()
-    result = rewrite_source(data, name or str(source), comp, options)
+    # the bytes are kept only for an in-place rewrite's backup; else they are let go of
+    # once decoded (a large file is not held twice while its model is built and used)
+    data = source.read_bytes() if in_place else None
+    result = _rewrite_owned([source.read_bytes() if data is None else data],
+                            name or str(source), comp, options)
     if result.skipped and options.strict:
         return result
-    if in_place:
+    if data is not None:
         backup = backup_path(source)
         write_bytes_atomic(backup, data)
         result.backup = str(backup)

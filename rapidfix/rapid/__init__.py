@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from rapidfix import lazy_exports
 from rapidfix.rapid.evaluate import NotConstant
 from rapidfix.rapid.instructions import MOTION_INSTRUCTIONS, STOPS_SHORT, MotionSpec, motion_spec
-from rapidfix.rapid.parse import load_program, parse_program
+from rapidfix.rapid.parse import load_program, parse_owned, parse_program
 from rapidfix.rapid.program import (
     Declaration,
     ModuleInfo,
@@ -140,6 +140,7 @@ __all__ = [
     "format_value",
     "load_program",
     "motion_spec",
+    "parse_owned",
     "parse_program",
     "placeholders_in",
     "read_jointtarget_declarations",

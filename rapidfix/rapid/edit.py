@@ -32,7 +32,7 @@ class Editor:
         self.program = program
         # what rendering needs, kept apart so that the model can go first (`release_program`)
         self._source = program.source
-        self._original = program.original
+        self._kept_bytes = program.kept_bytes
         # the edits as columns, in the order they were made: (start, end) offsets and
         # new text (a CAM program has hundreds of thousands of them)
         # (machine integers: two Python ints an edit cost 72 bytes more)
@@ -239,5 +239,5 @@ class Editor:
     def render(self) -> bytes:
         """The edited file as bytes: original encoding, BOM and line endings."""
         if not self._texts:
-            return self._original
+            return self._source.encode() if self._kept_bytes is None else self._kept_bytes
         return self._source.encode(self.text())

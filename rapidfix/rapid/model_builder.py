@@ -113,9 +113,10 @@ def _root_name(expr: s.Expr | None) -> s.NameRef | None:
 class ModelBuilder:
     """Builds a Program from source text and its syntax tree (see the module doc)."""
 
-    def __init__(self, source: SourceText, original: bytes, tree: s.SourceFile) -> None:
+    def __init__(self, source: SourceText, kept_bytes: bytes | None,
+                 tree: s.SourceFile) -> None:
         self.source = source
-        self.program = Program(source, original, tree)
+        self.program = Program(source, kept_bytes, tree)
         self.module_names: dict[str, dict[str, Declaration]] = {}
         self.global_names: dict[str, Declaration] = {}
         self.routine_names: dict[tuple[str, str], dict[str, object]] = {}
@@ -799,6 +800,7 @@ class ModelBuilder:
         return self.program
 
 
-def build_program(source: SourceText, original: bytes, tree: s.SourceFile) -> Program:
-    """The Program model of a parsed file."""
-    return ModelBuilder(source, original, tree).build()
+def build_program(source: SourceText, kept_bytes: bytes | None,
+                  tree: s.SourceFile) -> Program:
+    """The Program model of a parsed file; `kept_bytes` as `Program.kept_bytes`."""
+    return ModelBuilder(source, kept_bytes, tree).build()

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from lark.exceptions import UnexpectedInput
 
+from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.gc_pause import cyclic_gc_paused
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.grammar import rapid_parser
@@ -76,13 +77,39 @@ def parse_program(source: str | bytes, filename: str = "<string>") -> Program:
     cyclic collector's later collections (rapidfix.gc_pause.settle_new_objects); they
     are freed by reference counting when the Program is dropped.
     """
+    return parse_decoded(*decode_for_model(source, filename))
+
+
+def decode_for_model(source: str | bytes, filename: str) -> tuple[SourceText, bytes | None]:
+    """The decoded source and the bytes a Program must keep (`Program.kept_bytes`):
+    None when the text encodes back to exactly `source`, as nearly every file does.
+    A caller that lets go of `source` then spares a large file's bytes while its model
+    is built and used."""
     decoded = decode_source(source, filename)
-    original = source if isinstance(source, bytes) else decoded.encode()
+    if isinstance(source, str):
+        decoded.encode()  # a character the encoding cannot hold is refused here, as read
+        return decoded, None
+    try:
+        same = decoded.encode() == source
+    except RapidSyntaxError:
+        same = False
+    return decoded, None if same else source
+
+
+def parse_decoded(decoded: SourceText, kept_bytes: bytes | None) -> Program:
+    """`parse_program` of source decoded by `decode_for_model`."""
     with cyclic_gc_paused(collect_above=_MANY_OBJECTS):
-        return build_program(decoded, original, parse_source(decoded))
+        return build_program(decoded, kept_bytes, parse_source(decoded))
+
+
+def parse_owned(handed: list[bytes], filename: str = "<string>") -> Program:
+    """`parse_program` of the file bytes `handed` holds, taken out of it: when the caller
+    keeps no other reference, they are let go of once decoded (unless kept, see
+    `decode_for_model`), not held while the model is built and used."""
+    decoded, kept = decode_for_model(handed.pop(), filename)
+    return parse_decoded(decoded, kept)
 
 
 def load_program(path: str | Path) -> Program:
     """Read and parse a RAPID file (.mod, .modx, .prg, .sys)."""
-    file = Path(path)
-    return parse_program(file.read_bytes(), str(path))
+    return parse_owned([Path(path).read_bytes()], str(path))

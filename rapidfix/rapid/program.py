@@ -253,7 +253,9 @@ class Program:
     """A parsed RAPID file: its source, syntax tree and model."""
 
     source: SourceText = field(repr=False)
-    original: bytes = field(repr=False)
+    #: the file's bytes when its text does not encode back to exactly them, else None:
+    #: then `original` encodes the text again, and a large file is not held twice
+    kept_bytes: bytes | None = field(repr=False)
     syntax: s.SourceFile = field(repr=False)
     modules: list[ModuleInfo] = field(default_factory=list)
     declarations: list[Declaration] = field(default_factory=list)
@@ -273,6 +275,11 @@ class Program:
     @property
     def text(self) -> str:
         return self.source.text
+
+    @property
+    def original(self) -> bytes:
+        """The file exactly as it was read."""
+        return self.source.encode() if self.kept_bytes is None else self.kept_bytes
 
     @property
     def encoding(self) -> str:

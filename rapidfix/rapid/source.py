@@ -61,6 +61,13 @@ class SourceText:
         read as LF (`encode` writes them back)."""
         return "\n" if self.newline == "\r" else self.newline
 
+    @property
+    def line_count(self) -> int:
+        """How many lines the text has, counted as its messages count them (by LF; a
+        last line without one counts too)."""
+        text = self.text
+        return len(self._line_starts) - (not text or text.endswith("\n"))
+
     def line_column(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a character offset."""
         line = bisect_right(self._line_starts, offset)

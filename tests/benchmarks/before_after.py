@@ -83,10 +83,13 @@ _TIMED = {
                  ("rapidfix.postprocess.emission", None, "count_identifiers")),
     "language": (("rapidfix.rapid.parse", None, "parse_source"),),
     "rewrite": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
-                     ("parse_program", "plan_program", "refine_paths", "emit_edits")),
+                     ("parse_owned", "parse_program", "plan_program", "refine_paths",
+                      "emit_edits")),
     "odd": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
-                 ("parse_program", "plan_program", "emit_edits")),
+                 ("parse_owned", "parse_program", "plan_program", "emit_edits")),
 }
+# a step under another name in older trees, reported under that name
+_LABELS = {"parse_owned": "parse_program"}
 
 
 def _child(timed_set: str, argv: list[str]) -> None:
@@ -107,7 +110,8 @@ def _child(timed_set: str, argv: list[str]) -> None:
         if owner is not None:
             target = getattr(target, owner, None)
         if target is not None and hasattr(target, name):
-            setattr(target, name, timed(spent, name, getattr(target, name)))
+            setattr(target, name, timed(spent, _LABELS.get(name, name),
+                                        getattr(target, name)))
     sys.argv = ["rapidfix", *argv]
     try:
         console() if console is not None else cli.main(argv)

@@ -34,7 +34,8 @@ def timed(spent: dict[str, float], label: str, fn):
 
 #: (label, module, attribute) of the steps timed, in the order a rewrite takes them
 STEPS = (
-    ("parse + model", "rapidfix.postprocess.rewrite", "parse_program"),
+    # 'a|b': the first the tree has (b in trees before a)
+    ("parse + model", "rapidfix.postprocess.rewrite", "parse_owned|parse_program"),
     ("plan", "rapidfix.postprocess.rewrite", "plan_program"),
     ("path check", "rapidfix.postprocess.rewrite", "refine_paths"),
     ("emission", "rapidfix.postprocess.rewrite", "emit_edits"),
@@ -42,21 +43,23 @@ STEPS = (
     ("read back", "rapidfix.postprocess.rewrite", "read_back"),
     ("deviation", "rapidfix.postprocess.rewrite", "predicted_deviation"),
     ("write", "rapidfix.postprocess.rewrite", "write_bytes_atomic"),
-    ("rewrite_source", "rapidfix.postprocess.rewrite", "rewrite_source"),
+    ("rewrite_source", "rapidfix.postprocess.rewrite", "_rewrite_owned|rewrite_source"),
 )
 
 
 def time_steps(spent: dict[str, float], steps: tuple[tuple[str, str, str], ...],
                patch=setattr) -> None:
     """Put a timer (`timed`) on each (label, module, attribute path) of `steps`, with
-    `patch` (setattr here; a test's monkeypatch.setattr, which undoes it after)."""
+    `patch` (setattr here; a test's monkeypatch.setattr, which undoes it after). An
+    attribute 'a|b' is the first of those names the tree has (an older tree's name)."""
     import importlib
 
     for label, module_name, attribute in steps:
         owner = importlib.import_module(module_name)
-        *path, name = attribute.split(".")
+        *path, names = attribute.split(".")
         for part in path:
             owner = getattr(owner, part)
+        name = next(name for name in names.split("|") if hasattr(owner, name))
         patch(owner, name, timed(spent, label, getattr(owner, name)))
 
 

@@ -152,7 +152,7 @@ def test_rewrite_matrix(model_path, tmp_path):
 
 
 _PHASES = (  # (label, module, attribute) of rewrite_source's steps, in order
-    ("parse + model", "rapidfix.postprocess.rewrite", "parse_program"),
+    ("parse + model", "rapidfix.postprocess.rewrite", "parse_owned"),
     ("plan (IK, compensation)", "rapidfix.postprocess.rewrite", "plan_program"),
     ("path check", "rapidfix.postprocess.rewrite", "refine_paths"),
     ("emit (edits)", "rapidfix.postprocess.rewrite", "emit_edits"),

@@ -18,7 +18,7 @@ from rapidfix.postprocess.header import MARK
 from rapidfix.postprocess.planning import plan_program
 from rapidfix.postprocess.refinement import refine_paths
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
-from rapidfix.rapid import parse_program
+from rapidfix.rapid import parse_owned, parse_program
 
 from .conftest import SAMPLES
 
@@ -108,8 +108,8 @@ def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monk
     programs: list[weakref.ref] = []
     alive_at_render: list[bool] = []
 
-    def parse(data, filename):
-        program = parse_program(data, filename)
+    def parse(handed, filename):
+        program = parse_owned(handed, filename)
         programs.append(weakref.ref(program))
         return program
 
@@ -119,7 +119,7 @@ def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monk
         alive_at_render.append(programs[-1]() is not None)
         return render(self)
 
-    monkeypatch.setattr(rewrite_module, "parse_program", parse)
+    monkeypatch.setattr(rewrite_module, "parse_owned", parse)
     monkeypatch.setattr(Editor, "render", checked_render)
     data = (SAMPLES / name).read_bytes()
     result = rewrite_source(data, name, comp, RewriteOptions())
@@ -128,6 +128,37 @@ def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monk
     # and the bytes are those of the steps run with the model alive throughout
     _, _, emission = _steps(data, name, comp, RewriteOptions())
     assert emission.editor.render() == HEADER_LINE.sub(b"", result.data)
+
+
+@pytest.mark.parametrize("in_place", [False, True])
+def test_the_input_bytes_are_let_go_of_once_decoded(comp, tmp_path, monkeypatch, in_place):
+    """rewrite_file hands the file's bytes over to the parse and keeps no reference of
+    its own (but for an in-place rewrite's backup), so a large file is not held twice
+    while its model is built and used; the program keeps none either, as its text
+    encodes back to the same bytes. The output is the same either way."""
+    import sys
+
+    import rapidfix.postprocess.rewrite as rewrite_module
+    from rapidfix.postprocess.rewrite import rewrite_file
+
+    references: list[int] = []
+    kept: list[bytes | None] = []
+
+    def parse(handed, filename):
+        references.append(sys.getrefcount(handed[0]) - 1)  # less getrefcount's own
+        program = parse_owned(handed, filename)
+        kept.append(program.kept_bytes)
+        return program
+
+    source = tmp_path / "milling.mod"
+    source.write_bytes((SAMPLES / "milling.mod").read_bytes())
+    expected = rewrite_source(source.read_bytes(), str(source), comp, RewriteOptions()).data
+    monkeypatch.setattr(rewrite_module, "parse_owned", parse)
+    target = source if in_place else tmp_path / "out.mod"
+    result = rewrite_file(source, target, comp, RewriteOptions(), in_place=in_place)
+    # the list handed over, and the backup's copy for in_place
+    assert references == [2 if in_place else 1] and kept == [None]
+    assert target.read_bytes() == result.data == expected
 
 
 @pytest.mark.parametrize("name", ["milling.mod", "ballbar.mod"])

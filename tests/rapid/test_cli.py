@@ -15,6 +15,19 @@ def test_check_samples_ok(rapid_samples, capsys):
     assert out.count(": ok (") == len(rapid_samples)
 
 
+def test_check_counts_lines_as_its_messages_do(tmp_path, capsys):
+    """The line count `check` prints is that of an editor and of the messages' line
+    numbers, for each line ending and with or without a last LF (read from the line
+    table, not by splitting a million-line text into a list of lines)."""
+    body = "MODULE M\nPROC main()\n  MoveJ p10, v100, z10, tool0;\nENDPROC\nENDMODULE"
+    for newline in ("\n", "\r\n", "\r"):
+        for final in ("", newline):
+            path = tmp_path / "lines.mod"
+            path.write_bytes((body + final).replace("\n", newline).encode())
+            assert main(["check", str(path)]) == 0
+            assert "ok (5 lines, module M, 0 declarations" in capsys.readouterr().out
+
+
 def test_check_reports_each_bad_file_and_continues(tmp_path, rapid_samples, capsys):
     bad = tmp_path / "bad.mod"
     bad.write_text("MODULE M\nPROC main()\n  MoveL p10 v100, z10, tool0;\nENDPROC\nENDMODULE\n")

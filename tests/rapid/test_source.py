@@ -28,6 +28,7 @@ def test_round_trip_bytes(encoding, bom, expected, newline, final):
     assert program.newline == newline
     assert program.to_bytes() == data
     assert program.source.encode() == data
+    assert program.kept_bytes is None  # the text gives them back: not held twice
     string = program.routines[0].syntax.body[0].args[0].value.value
     assert string == "Grüße"
 
@@ -37,6 +38,26 @@ def test_latin1_fallback_keeps_undefined_cp1252_bytes():
     program = parse_program(data)
     assert program.encoding == "latin-1"
     assert program.source.encode() == data
+
+
+def test_bytes_the_text_does_not_give_back_are_kept(monkeypatch):
+    """A file whose decoded text would not encode back to exactly its bytes keeps them
+    (none is known: the rule is a guard), so `original` and an output without edits
+    are still the file as read; a string's text is checked once, when it is read."""
+    from rapidfix.rapid.edit import Editor
+    from rapidfix.rapid.parse import decode_for_model
+    from rapidfix.rapid.source import SourceText
+
+    data = b"MODULE M\nVAR num a;\nENDMODULE\n"
+    monkeypatch.setattr(SourceText, "encode", lambda self, text=None: b"other")
+    decoded, kept = decode_for_model(data, "x.mod")
+    assert kept is data and decoded.text == data.decode()
+    program = parse_program(data, "x.mod")
+    assert program.kept_bytes is data and program.original is data
+    assert Editor(program).render() is data
+    monkeypatch.undo()
+    with pytest.raises(RapidSyntaxError, match="cannot be written"):
+        parse_program("MODULE M\n! \ud800\nENDMODULE\n", "s.mod")
 
 
 def test_mixed_newlines():
