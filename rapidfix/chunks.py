@@ -27,3 +27,7 @@ LINE_BOUND = 8192
 #: targets per pass of naming the confdata that do reach a target (postprocess/plan.py):
 #: every branch and turn of each is solved and classified, about 10 KB a target
 EXPLAIN_CONF = 2048
+#: targets per pass of the model's error of the original moves (postprocess/rewrite.py):
+#: its flange, frame and TCP poses take about 1 KB a target, and they came at the
+#: rewrite's peak, with the program model, the plan and the emission alive
+PREDICTED_BEFORE = 16384

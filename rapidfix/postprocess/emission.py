@@ -767,12 +767,12 @@ class _Emitter:
 
     def _expected(self) -> Expected:
         """Each compensated pose: the check statement and slot it is read from, its
-        intended TCP, frames and the conditions it runs in."""
+        intended TCP position, frames and the conditions it runs in."""
         t = self.planned.targets
         ids, slots, rows = np.concatenate(
             [*self._check_columns, np.array(self.checks, dtype=int).reshape(-1, 3)]).T
         placement = t.placement.take(rows)
-        tcp, context = t.pose[rows], self.solved.context.take(rows)
+        position, context = t.pose[rows, :3, 3], self.solved.context.take(rows)
         joints = self.solved.q_cmd[rows]  # as written where a jointtarget is
         if self.inter_checks:
             inter_ids, seg, index = np.array(self.inter_checks, dtype=int).T
@@ -782,13 +782,13 @@ class _Emitter:
                 (placement.stationary, frames.stationary))))
             ids = np.concatenate([ids, inter_ids])
             slots = np.concatenate([slots, np.zeros(len(seg), int)])
-            tcp = np.concatenate([tcp, self.refined.points.pose[index]])
+            position = np.concatenate([position, self.refined.points.pose[index, :3, 3]])
             joints = np.concatenate([joints, self.refined.points.q_cmd[index]])
             inter = self.refined.context.take(seg)
             if self.refined.direction is not None:
                 inter = replace(inter, last_direction=self.refined.direction[index])
             context = Context.concatenate(context, inter)
-        return Expected(ids, slots, tcp, placement, context, joints)
+        return Expected(ids, slots, position, placement, context, joints)
 
 
 

@@ -28,12 +28,12 @@ import math
 import re
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from rapidfix import __version__
+from rapidfix import __version__, chunks
 from rapidfix.atomic import write_bytes_atomic
 from rapidfix.digest import sha256_bytes
 from rapidfix.error_model import compiled_sums
@@ -50,7 +50,7 @@ from rapidfix.postprocess.header import MARK, Header, read_header
 from rapidfix.postprocess.path import MIN_PATH_TOLERANCE_MM
 from rapidfix.postprocess.plan import Plan
 from rapidfix.postprocess.planning import ProgramPlan, plan_program
-from rapidfix.postprocess.refinement import START_UNKNOWN, refine_paths
+from rapidfix.postprocess.refinement import START_UNKNOWN, PathRefinement, refine_paths
 from rapidfix.postprocess.resolve import Declarations, Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
 from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_owned
@@ -296,15 +296,33 @@ def _declared_twice_warnings(program: Program, outside: Declarations) -> list[st
 def _predicted_before(comp: Compensator, targets: Targets, p: Plan
                       ) -> tuple[float, float] | None:
     """The model's TCP error (mean, max, mm) of the compensated targets as the original
-    program commands them (the ideal joints), in the conditions they run in."""
+    program commands them (the ideal joints), in the conditions they run in; in chunks
+    of `chunks.PREDICTED_BEFORE` targets, as this comes at the rewrite's peak."""
     t = targets
     rows = np.flatnonzero(p.ok)
     if rows.size == 0:
         return None
-    flange = comp.model.actual_flange(comp.robot, p.q_ideal[rows], p.context.take(rows))
-    tcp = t.placement.take(rows).tcp(flange)
-    err = np.linalg.norm(tcp[:, :3, 3] - t.pose[rows, :3, 3], axis=1)
+    err = np.empty(rows.size)
+    step = chunks.PREDICTED_BEFORE
+    for at in range(0, rows.size, step):
+        part = rows[at:at + step]
+        flange = comp.model.actual_flange(comp.robot, p.q_ideal[part], p.context.take(part))
+        tcp = t.placement.take(part).tcp(flange)
+        err[at:at + step] = np.linalg.norm(tcp[:, :3, 3] - t.pose[part, :3, 3], axis=1)
     return float(err.mean()), float(err.max())
+
+
+def _after_path_check(planned: ProgramPlan, refined: PathRefinement
+                      ) -> tuple[ProgramPlan, PathRefinement]:
+    """The plans without what only the path check reads: the intended flange poses
+    (N,4,4) and the plan's emission modes (the refinement has its own). A million-line
+    program's would otherwise stay through the emission, the rewrite's peak (about
+    200 bytes a target)."""
+    none = np.empty((0, 4, 4))
+    solved = replace(planned.solved, flange=none)
+    after = solved if refined.solved is planned.solved else replace(refined.solved,
+                                                                     flange=none)
+    return replace(planned, solved=solved, mode={}), replace(refined, solved=after)
 
 
 def _module_indent(program: Program) -> str:
@@ -389,6 +407,7 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
                            temperature_c=options.temperature_c, approach=options.approach)
     refined = refine_paths(program, comp.model, comp.robot, planned,
                            options.path_tolerance_mm, options.emit)
+    planned, refined = _after_path_check(planned, refined)
     emission = emit_edits(program, comp, planned, refined)
     skipped = [Skipped(site.where, site.label, site.reason)
                for site in planned.sites if site.reason is not None]

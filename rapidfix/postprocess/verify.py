@@ -40,13 +40,14 @@ class Expected:
     """What the output must hold, per checked pose: the motion instruction it is read
     from (`motion` (K,), an index into the list `parse_units` returns), the target
     operand of that motion (`slot` (K,): 0 the CirPoint or the only target, 1 the
-    ToPoint of a circular move), the intended TCP `tcp` (K,4,4) in its work object,
-    its frames and the conditions it runs in (`context`: payload, directions,
-    temperature)."""
+    ToPoint of a circular move), the intended TCP position `position` (K,3) mm in its
+    work object (what the predicted deviation is measured from: the pose's 16 numbers
+    would be held at the rewrite's peak), its frames and the conditions it runs in
+    (`context`: payload, directions, temperature)."""
 
     motion: np.ndarray
     slot: np.ndarray
-    tcp: np.ndarray
+    position: np.ndarray
     placement: Placement
     context: Context
     #: (K,6) rad: the joints the rewrite wrote for a pose it wrote as a jointtarget (what
@@ -278,4 +279,4 @@ def predicted_deviation(
     q = commanded_joints(robot, read, expected, filename)
     flange = model.actual_flange(robot, q, expected.context)
     tcp = expected.placement.tcp(flange)
-    return np.linalg.norm(tcp[:, :3, 3] - expected.tcp[:, :3, 3], axis=1)
+    return np.linalg.norm(tcp[:, :3, 3] - expected.position, axis=1)

@@ -355,8 +355,8 @@ def _expected(count, joints_deg=None):
     eye = np.repeat(np.eye(4)[None], count, 0)
     joints = None if joints_deg is None else np.radians(np.asarray(joints_deg, float))
     # the read-back needs no frames nor conditions
-    return Expected(np.arange(count), np.zeros(count, int), eye, Placement(eye, eye, eye),
-                    None, joints)
+    return Expected(np.arange(count), np.zeros(count, int), np.zeros((count, 3)),
+                    Placement(eye, eye, eye), None, joints)
 
 
 _DECLS = ["CONST jointtarget jt_a:=[[1,2,3,4,5,6],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",

@@ -56,6 +56,26 @@ def test_the_steps_make_every_edit_of_the_rewrite_but_its_header(comp, name, emi
     assert len(emission.expected.motion) >= result.moves_compensated
 
 
+def test_the_emission_gets_the_plans_without_what_only_the_path_check_reads(comp,
+                                                                           monkeypatch):
+    """The intended flange poses and the plan's own modes go before the emission, the
+    rewrite's peak; the test above shows the bytes are those of the steps with them."""
+    import rapidfix.postprocess.rewrite as rewrite_module
+
+    seen = []
+
+    def emit(program, comp_, planned, refined):
+        seen.append((planned.solved.flange.shape, refined.solved.flange.shape, planned.mode,
+                     len(refined.mode)))
+        return emit_edits(program, comp_, planned, refined)
+
+    monkeypatch.setattr(rewrite_module, "emit_edits", emit)
+    result = rewrite_source((SAMPLES / "milling.mod").read_bytes(), "milling.mod", comp,
+                            RewriteOptions())
+    assert seen == [((0, 4, 4), (0, 4, 4), {}, result.moves_compensated)]
+    assert result.moves_compensated > 0
+
+
 @pytest.mark.parametrize("name", ["milling.mod", "palletizer.prg", "ballbar.mod"])
 def test_refinement_leaves_the_plan_it_was_given_as_it_was(name):
     """Directions along refined paths solve some destinations again: the refinement
