@@ -29,5 +29,11 @@ LINE_BOUND = 8192
 EXPLAIN_CONF = 2048
 #: targets per pass of the model's error of the original moves (postprocess/rewrite.py):
 #: its flange, frame and TCP poses take about 1 KB a target, and they came at the
-#: rewrite's peak, with the program model, the plan and the emission alive
+#: rewrite's peak, with the program model, the plan and the emission alive (a figure
+#: the rewrite only prints: its last bits follow BLAS's matrix-vector products, whose
+#: rounding depends on how many rows a call has)
 PREDICTED_BEFORE = 16384
+#: declarations given to the editor at a time after their anchors (postprocess/emission.py):
+#: the anchors' offsets and line starts take about 200 bytes each while they are placed,
+#: at the rewrite's peak
+INSERTED_DECLARATIONS = 16384

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rapidfix import chunks
 from rapidfix.error_model import Context
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission_forms import (
@@ -744,6 +745,9 @@ class _Emitter:
             if type(anchor) is int:
                 after.append((target.syntax.start, target.syntax.end))
                 after_texts.append(block if type(block) is str else "\n".join(block))
+                if len(after) == chunks.INSERTED_DECLARATIONS:  # the same edits, in order
+                    self.editor.insert_lines_after(after, after_texts)
+                    after, after_texts = [], []
             else:
                 self.editor.insert_lines_after(after, after_texts)
                 after, after_texts = [], []

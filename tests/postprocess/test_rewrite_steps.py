@@ -181,6 +181,27 @@ def test_the_input_bytes_are_let_go_of_once_decoded(comp, tmp_path, monkeypatch,
     assert target.read_bytes() == result.data == expected
 
 
+@pytest.mark.parametrize("size", [1, 3])
+def test_the_peak_steps_in_chunks_give_the_same_rewrite(comp, monkeypatch, size):
+    """The new declarations placed after theirs (`chunks.INSERTED_DECLARATIONS` at a
+    time) and the model's error of the original moves (`chunks.PREDICTED_BEFORE` targets
+    at a time) give the same bytes and figures in chunks of 1 and 3 as in one: the
+    figures to their last bits, which follow BLAS's rounding of a product of so many
+    rows (the same program always gives the same ones)."""
+    from rapidfix import chunks
+
+    data = (SAMPLES / "milling.mod").read_bytes()
+    # named targets: a new jointtarget goes after each one's declaration
+    assert b"CONST robtarget" in data
+    whole = rewrite_source(data, "milling.mod", comp, RewriteOptions())
+    monkeypatch.setattr(chunks, "PREDICTED_BEFORE", size)
+    monkeypatch.setattr(chunks, "INSERTED_DECLARATIONS", size)
+    chunked = rewrite_source(data, "milling.mod", comp, RewriteOptions())
+    assert chunked.data == whole.data and whole.moves_compensated > 3
+    assert np.allclose(chunked.predicted_before_mm, whole.predicted_before_mm, rtol=1e-12,
+                       atol=0.0)
+
+
 @pytest.mark.parametrize("name", ["milling.mod", "ballbar.mod"])
 def test_the_line_bound_in_blocks_of_segments_gives_the_same_rewrite(comp, name, monkeypatch):
     """The path check bounds each segment's bow in blocks of `chunks.LINE_BOUND`
