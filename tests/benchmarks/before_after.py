@@ -164,7 +164,8 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="before_after_"))
     model = str(options.model.resolve())  # the children run in the temporary folder
     trees = {"before": options.base.resolve(), "after": TREE}
-    steps = [None, *(name for _, _, name in _TIMED[options.cases])]
+    steps = [None, *dict.fromkeys(_LABELS.get(name, name)
+                                  for _, _, name in _TIMED[options.cases])]
     warm: set[str] = set()
     print(f"{'case':26s} " + " ".join(f"{step or 'whole process':>22s}" for step in steps)
           + "  same bytes")
