@@ -410,10 +410,12 @@ class _Emitter:
                     known: dict[tuple[str, str], str], prefix: str,
                     declaration: Callable[[str, str], str], joint: bool) -> list[str]:
         """The name of each (stem, literal) in turn, as asked one by one: `known` (stem
-        lower-cased, literal) -> name, extended by the names of the new ones, allocated
+        lower-cased, literal) -> name, the names given before, the new ones allocated
         from `prefix` + stem and declared (`declaration(name, literal)`) together, after
-        the targets' robtargets or among their modules' declarations. `joint`: the
-        declarations are jointtargets' (read back as columns)."""
+        the targets' robtargets or among their modules' declarations. `known` is
+        extended by the new names only when a (stem, literal) recurs among these; both
+        callers let it go after the call. `joint`: the declarations are jointtargets'
+        (read back as columns)."""
         keys = list(zip(map(str.lower, stems), literals))
         first: dict[tuple[str, str], int] = {}
         deque(map(first.setdefault, keys, range(len(keys))), maxlen=0)  # first use of each
@@ -422,15 +424,18 @@ class _Emitter:
             order: list[int] | range = range(len(keys))
             names = self.names.allocate_many(stems, prefix)
             name_at = names
-            known.update(zip(keys, names))
         else:
             order = [n for key, n in first.items() if key not in known]
             names = self.names.allocate_many([stems[n] for n in order], prefix)
             known.update(zip([keys[n] for n in order], names))
             name_at = list(map(known.__getitem__, keys))
+        # the keys go before the declarations are made, the emission's peak (a million
+        # moves' keys and their table take some 200 MB)
+        del keys, first
         self._add_declarations(
             [motions[n] for n in order], [operands[n] for n in order],
-            list(map(declaration, names, [literals[n] for n in order])), joint)
+            list(map(declaration, names, literals if type(order) is range
+                     else [literals[n] for n in order])), joint)
         return name_at
 
     def _points_before(self, site: Site, inter: tuple[int, int] | None, inter_names: list[str],
