@@ -429,8 +429,8 @@ class _Emitter:
             names = self.names.allocate_many([stems[n] for n in order], prefix)
             known.update(zip([keys[n] for n in order], names))
             name_at = list(map(known.__getitem__, keys))
-        # the keys go before the declarations are made, the emission's peak (a million
-        # moves' keys and their table take some 200 MB)
+        # the keys (a tuple and a table entry each) go before the declarations are made,
+        # the emission's peak
         del keys, first
         self._add_declarations(
             [motions[n] for n in order], [operands[n] for n in order],
