@@ -504,9 +504,9 @@ def rewrite_file(
             hint="choose another target, or pass in_place=True (keeps a backup)")
     # the bytes are kept only for an in-place rewrite's backup; else they are let go of
     # once decoded (a large file is not held twice while its model is built and used)
-    data = source.read_bytes() if in_place else None
-    result = _rewrite_owned([source.read_bytes() if data is None else data],
-                            name or str(source), comp, options)
+    handed = [source.read_bytes()]
+    data = handed[0] if in_place else None
+    result = _rewrite_owned(handed, name or str(source), comp, options)
     if result.skipped and options.strict:
         return result
     if data is not None:

@@ -82,14 +82,18 @@ _TIMED = {
                  ("rapidfix.postprocess.emission", "_Emitter", "_filtered"),
                  ("rapidfix.postprocess.emission", None, "count_identifiers")),
     "language": (("rapidfix.rapid.parse", None, "parse_source"),),
+    # 'a|b': the first the tree has (b in trees before a), reported as a
     "rewrite": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
-                     ("parse_owned", "parse_program", "plan_program", "refine_paths",
+                     ("parse_owned|parse_program", "plan_program", "refine_paths",
                       "emit_edits")),
     "odd": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
-                 ("parse_owned", "parse_program", "plan_program", "emit_edits")),
+                 ("parse_owned|parse_program", "plan_program", "emit_edits")),
 }
-# a step under another name in older trees, reported under that name
-_LABELS = {"parse_owned": "parse_program"}
+
+
+def _label(names: str) -> str:
+    """How a timed step ('a' or 'a|b') is reported: by its first name."""
+    return names.split("|")[0]
 
 
 def _child(timed_set: str, argv: list[str]) -> None:
@@ -102,16 +106,16 @@ def _child(timed_set: str, argv: list[str]) -> None:
     console = getattr(cli, "console_main", None)
     # what it sets before numpy is imported, which the timers below import
     getattr(cli, "prepare_process", lambda: None)()
-    from process_phases import timed  # this script's folder: sys.path[0]
+    from process_phases import present_name, timed  # this script's folder: sys.path[0]
 
     spent: dict[str, float] = {}
-    for module_name, owner, name in _TIMED[timed_set]:
+    for module_name, owner, names in _TIMED[timed_set]:
         target = importlib.import_module(module_name)
         if owner is not None:
             target = getattr(target, owner, None)
-        if target is not None and hasattr(target, name):
-            setattr(target, name, timed(spent, _LABELS.get(name, name),
-                                        getattr(target, name)))
+        name = None if target is None else present_name(target, names)
+        if name is not None:
+            setattr(target, name, timed(spent, _label(names), getattr(target, name)))
     sys.argv = ["rapidfix", *argv]
     try:
         console() if console is not None else cli.main(argv)
@@ -164,8 +168,7 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="before_after_"))
     model = str(options.model.resolve())  # the children run in the temporary folder
     trees = {"before": options.base.resolve(), "after": TREE}
-    steps = [None, *dict.fromkeys(_LABELS.get(name, name)
-                                  for _, _, name in _TIMED[options.cases])]
+    steps = [None, *(_label(names) for _, _, names in _TIMED[options.cases])]
     warm: set[str] = set()
     print(f"{'case':26s} " + " ".join(f"{step or 'whole process':>22s}" for step in steps)
           + "  same bytes")

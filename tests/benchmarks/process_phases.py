@@ -59,8 +59,15 @@ def time_steps(spent: dict[str, float], steps: tuple[tuple[str, str, str], ...],
         *path, names = attribute.split(".")
         for part in path:
             owner = getattr(owner, part)
-        name = next(name for name in names.split("|") if hasattr(owner, name))
+        name = present_name(owner, names)
+        if name is None:
+            raise AttributeError(f"{module_name} has none of {names}")
         patch(owner, name, timed(spent, label, getattr(owner, name)))
+
+
+def present_name(owner: object, names: str) -> str | None:
+    """Of `names` ('a' or 'a|b': b in trees before a), the first `owner` has, or None."""
+    return next((name for name in names.split("|") if hasattr(owner, name)), None)
 
 
 def _time_kernel_imports() -> None:
