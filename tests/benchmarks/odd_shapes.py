@@ -38,6 +38,14 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                through the wrist singularity: the path check's hopeless segments
 - lone_cr:     a file from an old Mac editor: every line ends in a lone CR (no LF
                anywhere), with comments on their own lines and after statements
+- arc_weld:    an arc-welding cell (the Arc option's instructions): `ArcLStart`, `ArcL`
+               with `\\Weave` between its welddata and zone, `ArcC` with its circle
+               point, `ArcLEnd`, seam, weld and weave data; MoveJ between the seams
+- wrapped:     a post that wraps long lines: every inline target goes on over a second
+               line, so a statement spans two
+- scoped:      a system module (`MODULE m(SYSMODULE, NOSTEPIN)`) of LOCAL, TASK PERS and
+               VAR targets, LOCAL routines, moves with `\\TLoad` (some with `load0`, the
+               tool's own load) and GripLoad between them
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -56,7 +64,7 @@ from rapidfix.kinematics import load_robot
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
-              "concurrent", "flips", "lone_cr")
+              "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -407,6 +415,56 @@ def _lone_cr(n: int) -> list[str]:
             *_parts(moves), "ENDMODULE"]
 
 
+def _arc_weld(n: int) -> list[str]:
+    data = ["  PERS seamdata seam1:=[0.5,0.5,[5,0,24,120,0,0,0,0,0],0.5,1,10,0,5,"
+            "[5,0,24,120,0,0,0,0,0],0,1,[5,0,24,120,0,0,0,0,0],0,0,[0,0,0,0,0,0,0,0,0],0];",
+            "  PERS welddata weld1:=[10,0,[5,0,24,120,0,0,0,0,0],[0,0,0,0,0,0,0,0,0]];",
+            "  PERS weavedata weave1:=[1,0,3,4,0,0,0,0,0,0,0,0,0,0,0];"]
+    moves = []
+    for k in range(n):
+        step = k % 12
+        if step == 0:
+            moves.append(f"    MoveJ Offs(p{k},0,0,30),v1000,z20,tMill\\WObj:=wPlate;")
+        elif step == 1:
+            moves.append(f"    ArcLStart p{k},v100,seam1,weld1,fine,tMill\\WObj:=wPlate;")
+        elif step == 6:  # an arc: its circle point, then its end
+            moves.append(f"    ArcC p{k},p{k + 1},v100,seam1,weld1\\Weave:=weave1,z1,"
+                         "tMill\\WObj:=wPlate;")
+        elif step == 7:
+            continue
+        elif step == 11:
+            moves.append(f"    ArcLEnd p{k},v100,seam1,weld1,fine,tMill\\WObj:=wPlate;")
+        else:
+            moves.append(f"    ArcL p{k},v100,seam1,weld1\\Weave:=weave1,z1,tMill\\WObj:=wPlate;")
+    return [*_head("ArcWeld"), *data, *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
+def _wrapped(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    moves = []
+    for k in range(n):
+        first, rest = _robtarget(trans[k], confs[k]).rsplit("],[", 1)
+        moves += [f"    MoveL {first}],", f"        [{rest},v100,z1,tMill\\WObj:=wPlate;"]
+    return [*_head("Wrapped"), *_parts(moves, 1000), "ENDMODULE"]
+
+
+def _scoped(n: int) -> list[str]:
+    head = _head("Scoped")
+    head[0] = "MODULE Scoped(SYSMODULE, NOSTEPIN)"
+    loads = ["  PERS loaddata lBox:=[2.5,[0,0,80],[1,0,0,0],0,0,0];",
+             "  TASK PERS loaddata lPart:=[1.2,[0,10,40],[1,0,0,0],0,0,0];"]
+    decls = [("  LOCAL CONST", "  TASK PERS", "  VAR")[i % 3] + line[len("  CONST"):]
+             for i, line in enumerate(_decls(n))]
+    moves = []
+    for k in range(n):
+        if k % 40 == 0:
+            moves.append(f"    GripLoad {('lBox', 'load0', 'lPart')[(k // 40) % 3]};")
+        load = ("", "\\TLoad:=lBox", "\\TLoad:=load0", "\\TLoad:=lPart")[k % 4]
+        moves.append(f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate{load};")
+    routines = [line.replace("  PROC ", "  LOCAL PROC ") for line in _parts(moves, 400)]
+    return [*head, *loads, *decls, *routines, "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -417,7 +475,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "feeds": _feeds, "tails": _tails, "five_axis": _five_axis, "track": _track,
              "remarks": _remarks, "spaced": _spaced,
              "latin1": _latin1, "concurrent": _concurrent, "flips": _flips,
-             "lone_cr": _lone_cr}
+             "lone_cr": _lone_cr, "arc_weld": _arc_weld, "wrapped": _wrapped,
+             "scoped": _scoped}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
