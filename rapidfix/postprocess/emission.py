@@ -35,7 +35,7 @@ from rapidfix.postprocess.naming import NameAllocator, count_identifiers
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.planning import ProgramPlan
 from rapidfix.postprocess.refinement import PathRefinement
-from rapidfix.postprocess.reparse_changes import CheckUnits, JointSlot
+from rapidfix.postprocess.reparse_changes import CheckUnits, JointSlot, TargetSlot
 from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
 from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
@@ -90,6 +90,21 @@ def indent_before(program: Program, offset: int) -> str | None:
     before = source.text[source.line_start(offset):offset]
     return before if before.strip() == "" else None
 
+
+def _target_slot(text: str, syntax: Any, spans: list[Any], targets: list[str], statement: str,
+                 keep: Callable[[str, str], str]) -> TargetSlot | None:
+    """The TargetSlot of a statement (`syntax` in `text`) whose targets stand at `spans`,
+    written now as `targets`; None when they do not stand in that order or the slot does
+    not give `statement` back (the read-back then parses the statement)."""
+    parts: list[str] = []
+    at = syntax.start
+    for span, target in zip(spans, targets):
+        if span.start < at:
+            return None
+        parts += [keep(text[at:span.start], text[at:span.start]), target]
+        at = span.end
+    parts.append(keep(text[at:syntax.end], text[at:syntax.end]))
+    return tuple(parts) if "".join(parts) == statement else None
 
 def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tuple]:
     """The edits of a statement to a point inserted before `motion`: the optional
@@ -515,10 +530,10 @@ class _Emitter:
                           texts: list[str], joint: bool = True) -> None:
         """`_add_declaration` for many targets: each anchor's block and the check units
         are extended by runs of targets with the same anchor (a CAM program's new
-        declarations all go among one module's). `joint`: jointtarget declarations (the
-        check units keep them apart, to be read back as columns)."""
+        declarations all go among one module's). `joint`: jointtarget declarations, else
+        robtarget ones (the check units keep either apart, to be read back as columns)."""
         add_units = (self.units.add_jointtarget_declarations if joint
-                     else self.units.add_declarations)
+                     else self.units.add_robtarget_declarations)
         module_of: dict[str, Any] = {}
         for module in self.program.modules:
             module_of.setdefault(module.name, module)
@@ -631,7 +646,7 @@ class _Emitter:
         scopes = [(decls[k].module, decls[k].routine) for k in chosen]
         for where, run in groupby(scopes):  # the check units, by runs of one scope
             size = len(list(run))
-            self.units.add_declarations(*where, news[pos:pos + size])
+            self.units.add_robtarget_declarations(*where, news[pos:pos + size])
             pos += size
         return {id(decls[k]) for k in chosen}
 
@@ -708,25 +723,37 @@ class _Emitter:
                                      {}, "ft_", robtarget_declaration, joint=False)
             for n, name in zip(named, names):
                 new[n] = name
-        # the statements: a site's text with its targets' values replaced
+        # the statements: a site's text with its targets' values replaced, each with its
+        # TargetSlot (the texts around its targets, and the targets as written now)
         text = self.program.text
         motions = [site.motion for site in sites]
         syntaxes = [motion.syntax for motion in motions]
+        spans = [op.argument.value for op in operands]
+        targets = [text[span.start:span.end] if value is None else value
+                   for span, value in zip(spans, new)]
+        # the texts around the targets repeat (a few dozen speed, zone and tool
+        # combinations): one string for each distinct one, which the slots then share
+        keep = {}.setdefault
+        slots: list[TargetSlot | None]
         if len(operands) == len(sites):  # a target a site (the usual case)
-            statements = [text[syntax.start:syntax.end] if value is None
-                          else text[syntax.start:span.start] + value + text[span.end:syntax.end]
-                          for syntax, span, value in zip(
-                              syntaxes, [op.argument.value for op in operands], new)]
+            heads = [keep(head, head) for head in
+                     [text[syntax.start:span.start] for syntax, span in zip(syntaxes, spans)]]
+            tails = [keep(tail, tail) for tail in
+                     [text[span.end:syntax.end] for syntax, span in zip(syntaxes, spans)]]
+            slots = list(zip(heads, targets, tails))
+            statements = list(map("".join, slots))
             edited = [k for k, value in enumerate(new) if value is not None]
         else:  # a site of several targets (a MoveC) by its edits
-            statements = []
+            statements, slots = [], []
             edited = []  # the sites whose statement changes
             n = 0
             for k, site in enumerate(sites):
                 size = len(site.rows)
-                edits = [(operands[m].argument.value.start, operands[m].argument.value.end,
-                          new[m]) for m in range(n, n + size) if new[m] is not None]
+                edits = [(spans[m].start, spans[m].end, new[m])
+                         for m in range(n, n + size) if new[m] is not None]
                 statements.append(statement_variant(self.program, site.motion, edits))
+                slots.append(_target_slot(text, syntaxes[k], spans[n:n + size],
+                                          targets[n:n + size], statements[-1], keep))
                 if edits:
                     edited.append(k)
                 n += size
@@ -734,7 +761,8 @@ class _Emitter:
                                  [syntaxes[k].end for k in edited],
                                  [statements[k] for k in edited])
         idents = self.units.add_statements([motion.module for motion in motions],
-                                           [motion.routine for motion in motions], statements)
+                                           [motion.routine for motion in motions], statements,
+                                           target_slots=slots)
         self._add_checks([idents[k] for k in site_of], rows, slot_of)
 
     def _flush_declarations(self) -> None:

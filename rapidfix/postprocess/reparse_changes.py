@@ -22,6 +22,9 @@ from rapidfix.rapid import MotionInstruction, Program, parse_program
 
 #: a statement naming the jointtarget it moves to: (text before the name, the name, text after)
 JointSlot = tuple[str, str, str]
+#: a statement whose targets are robtargets named or written inline: the texts around its
+#: targets and the targets, (text, target, text, ..., target, text)
+TargetSlot = tuple[str, ...]
 
 
 @dataclass
@@ -30,31 +33,52 @@ class CheckUnits:
 
     `add_statement` returns the statement's id; `order()` lists the ids in the
     order their motion instructions appear in the check program. Declarations of
-    jointtargets (`add_jointtarget_declarations`) and statements given with their
-    `JointSlot` (a MoveAbsJ to a jointtarget by name) are also kept apart, so that the
-    read-back can take them as columns (`verify`).
+    jointtargets (`add_jointtarget_declarations`) and of robtargets
+    (`add_robtarget_declarations`), and statements given with their `JointSlot` (a
+    MoveAbsJ to a jointtarget by name) or their `TargetSlot` (an instruction kept, its
+    filtered robtargets named or inline) are also kept apart, so that the read-back can
+    take them as columns (`verify`).
     """
 
     comments: list[str] = field(default_factory=list)
+    #: by scope: the declarations in the order they came, and the kind of each
+    #: ("joint", "robtarget" or "other")
     _decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
-    _joint_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
-    _other_decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
+    _kinds: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
     #: by scope: runs of statements with consecutive ids, (first id, texts) (not an
     #: (id, text) pair per statement: a CAM program has hundreds of thousands)
     _statements: dict[tuple[str, str], list[tuple[int, list[str]]]] = field(default_factory=dict)
     #: by statement id: its JointSlot, or None
     _slots: list[JointSlot | None] = field(default_factory=list)
+    #: by statement id: its TargetSlot, or None
+    _target_slots: list[TargetSlot | None] = field(default_factory=list)
     _count: int = 0
 
     def add_declaration(self, module: str, routine: str | None, text: str) -> None:
         """A new or replaced declaration (`routine` None at module level)."""
-        self._decls.setdefault((module, routine), []).append(text)
-        self._other_decls.setdefault((module, routine), []).append(text)
+        self._add((module, routine), [text], "other")
 
-    def add_declarations(self, module: str, routine: str | None, texts: list[str]) -> None:
-        """`add_declaration` for many declarations of one scope."""
-        self._decls.setdefault((module, routine), []).extend(texts)
-        self._other_decls.setdefault((module, routine), []).extend(texts)
+    def add_robtarget_declarations(self, module: str, routine: str | None,
+                                   texts: list[str]) -> None:
+        """`add_declaration` for many robtarget declarations (new or replaced) of one
+        scope."""
+        self._add((module, routine), texts, "robtarget")
+
+    def _add(self, scope: tuple[str, str | None], texts: list[str], kind: str) -> None:
+        self._decls.setdefault(scope, []).extend(texts)
+        self._kinds.setdefault(scope, []).extend([kind] * len(texts))
+
+    def _declarations(self, kind: str) -> dict[tuple[str, str | None], list[str]]:
+        """The declarations of one kind, by scope (a scope's own list where all are)."""
+        found = {}
+        for scope, kinds in self._kinds.items():
+            count = kinds.count(kind)
+            if count == len(kinds):
+                found[scope] = self._decls[scope]
+            elif count:
+                found[scope] = [text for text, of in zip(self._decls[scope], kinds)
+                                if of == kind]
+        return found
 
     def add_statement(self, module: str, routine: str, text: str) -> int:
         """A new or replaced motion instruction; returns its id."""
@@ -66,18 +90,19 @@ class CheckUnits:
         else:
             runs.append((ident, [text]))
         self._slots.append(None)
+        self._target_slots.append(None)
         return ident
 
     def add_jointtarget_declarations(self, module: str, routine: str | None,
                                      texts: list[str]) -> None:
         """`add_declaration` for many `CONST jointtarget` declarations of one scope."""
-        self._decls.setdefault((module, routine), []).extend(texts)
-        self._joint_decls.setdefault((module, routine), []).extend(texts)
+        self._add((module, routine), texts, "joint")
 
     def add_statements(self, modules: list[str], routines: list[str], texts: list[str],
-                       slots: list[JointSlot | None] | None = None) -> range:
+                       slots: list[JointSlot | None] | None = None,
+                       target_slots: list[TargetSlot | None] | None = None) -> range:
         """`add_statement` for many statements (module and routine of each, and the
-        JointSlot of each or None); their ids."""
+        JointSlot or the TargetSlot of each or None); their ids."""
         first = self._count
         self._count += len(texts)
         statements = self._statements
@@ -91,7 +116,9 @@ class CheckUnits:
             else:
                 runs.append((pos, part))
             pos += size
-        self._slots.extend(slots if slots is not None else [None] * len(texts))
+        none = [None] * len(texts)
+        self._slots.extend(slots if slots is not None else none)
+        self._target_slots.extend(target_slots if target_slots is not None else none)
         return range(first, self._count)
 
     @property
@@ -102,13 +129,22 @@ class CheckUnits:
         """The JointSlot of each statement (by id), None for the others."""
         return self._slots
 
+    def target_slots(self) -> list[TargetSlot | None]:
+        """The TargetSlot of each statement (by id), None for the others."""
+        return self._target_slots
+
     def joint_declarations(self) -> dict[tuple[str, str | None], list[str]]:
         """The jointtarget declarations by (module, routine or None)."""
-        return self._joint_decls
+        return self._declarations("joint")
+
+    def robtarget_declarations(self) -> dict[tuple[str, str | None], list[str]]:
+        """The robtarget declarations by (module, routine or None)."""
+        return self._declarations("robtarget")
 
     def other_declarations(self) -> dict[tuple[str, str | None], list[str]]:
-        """The declarations other than `joint_declarations`, by (module, routine or None)."""
-        return self._other_decls
+        """The declarations other than `joint_declarations` and `robtarget_declarations`,
+        by (module, routine or None)."""
+        return self._declarations("other")
 
     def statement_scopes(self) -> list[tuple[tuple[str, str], list[int]]]:
         """(module, routine) and the ids of its statements, for each scope."""
@@ -125,15 +161,22 @@ class CheckUnits:
                 routines[routine] = None
         return by_module
 
-    def text(self, others_only: bool = False) -> tuple[str, list[int]]:
+    def text(self, without: tuple[str, ...] = ()) -> tuple[str, list[int]]:
         """The check program and the statement ids in the order they appear in it;
-        `others_only`: without the jointtarget declarations and the statements with a
-        JointSlot."""
+        `without` "joint": without the jointtarget declarations and the statements with
+        a JointSlot; "robtarget": without the robtarget declarations and the statements
+        with a TargetSlot."""
         out: list[str] = []
         order: list[int] = []
         modules = self._routines() or {"RapidfixCheck": {}}  # the comments alone
-        decls = self._other_decls if others_only else self._decls
-        slots = self._slots
+        joint, robtarget = "joint" in without, "robtarget" in without
+        decls = self._decls
+        if without:
+            decls = {scope: [text for text, kind in zip(texts, self._kinds[scope])
+                             if kind not in without] for scope, texts in self._decls.items()}
+        none = [None] * self._count if joint != robtarget else []
+        slots = self._slots if joint else none
+        target_slots = self._target_slots if robtarget else none
         for n, (module, routines) in enumerate(modules.items()):
             out.append(f"MODULE {module}")
             if n == 0:
@@ -144,7 +187,8 @@ class CheckUnits:
                 out.extend(decls.get((module, routine), []))
                 for first, texts in self._statements.get((module, routine), []):
                     for ident, statement in enumerate(texts, first):
-                        if others_only and slots[ident] is not None:
+                        if without and (slots[ident] is not None
+                                        or target_slots[ident] is not None):
                             continue
                         out.append(statement)
                         order.append(ident)

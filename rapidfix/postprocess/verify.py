@@ -13,9 +13,11 @@ and the intended TCP is the predicted deviation.
 from __future__ import annotations
 
 import re
+from collections import deque
 from dataclasses import dataclass
 from itertools import repeat
 from operator import is_not, itemgetter
+from typing import Any
 
 import numpy as np
 
@@ -30,6 +32,8 @@ from rapidfix.rapid import (
     ReadBack,
     parse_program,
     read_jointtarget_declarations,
+    read_robtarget_declarations,
+    read_robtarget_literals,
     read_targets_full,
     read_targets_in_bulk,
 )
@@ -112,6 +116,8 @@ def _check_joints(read: ReadBack, expected: Expected, filename: str) -> None:
 # the jointtarget a template statement moves to, and the axes it holds
 _TEMPLATE_NAME = "rapidfix_template_target"
 _TEMPLATE_AXES = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+# the robtargets a template statement of kept instructions moves to: name + its slot
+_TEMPLATE_ROBTARGET = "rapidfix_template_robtarget"
 # the name a declaration declares (after LOCAL / TASK, the storage and the type)
 # (a name may hold letters of ISO 8859-1: `\w` takes every letter the grammar's NAME does)
 _DECLARED = re.compile(r"\s*(?:LOCAL\s+)?(?:TASK\s+)?(?:VAR|PERS|CONST)\s+\w+\s+(\w+)",
@@ -119,28 +125,35 @@ _DECLARED = re.compile(r"\s*(?:LOCAL\s+)?(?:TASK\s+)?(?:VAR|PERS|CONST)\s+\w+\s+
 
 
 def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadBack | None:
-    """The targets, with the MoveAbsJ statements the emission made as columns (a JointSlot:
-    text before the name, the name, text after) read as columns: the same check as
-    parsing them, at list speed. None when there are none or anything does not fit
-    (`read_back` then parses the whole).
+    """The targets, with the statements the emission made as columns read as columns: the
+    MoveAbsJ statements (a JointSlot: text before the name, the name, text after) and
+    the instructions kept with filtered robtargets (a TargetSlot: the texts around the
+    targets, and the targets, named or inline). The same check as parsing them, at list
+    speed. None when there are none or anything does not fit (`read_back` then parses
+    the whole).
 
     - The jointtarget declarations: one regular-expression pass over all of them and one
       conversion of their numbers (`read_jointtarget_declarations`); a name declared
       twice in a scope, or also by another new declaration of the module (the names
       are allocated to be new, so that is a bug), is a clash and stops the rewrite.
-    - The statements: each distinct text around the name (a CAM program has a few dozen)
-      is parsed once, with a name of the same kind in its place, and must be a call
-      whose target reads that name's jointtarget; each name is found as RAPID finds it
-      (the routine's data, then the module's) among the new jointtargets.
-    - Everything else (filtered robtargets, replaced declarations, the header comments)
+    - The robtarget declarations (new ones, and those whose value the emission
+      replaced): the same (`read_robtarget_declarations`); the first of a name in a
+      scope counts, as in the model.
+    - The statements: each distinct text around the names (a CAM program has a few
+      dozen) is parsed once, with names of the same kind in their places, and must be a
+      call whose targets read those names' values; each name is found as RAPID finds it
+      (the routine's data, then the module's) among the new declarations; a robtarget
+      written inline is read where it stands.
+    - Everything else (the header comments, anything the emission wrote move by move)
       is parsed and read as before, on its own.
     """
-    slots = units.joint_slots()
+    slots, target_slots = units.joint_slots(), units.target_slots()
     k = expected.motion.shape[0]
-    if not k or not any(slots):
+    if not k or not (any(slots) or any(target_slots)):
         return None
     is_joint = np.fromiter(map(is_not, slots, repeat(None)), bool, len(slots))
-    joint_rows = is_joint[expected.motion]
+    is_target = np.fromiter(map(is_not, target_slots, repeat(None)), bool, len(slots))
+    joint_rows, target_rows = is_joint[expected.motion], is_target[expected.motion]
     if expected.slot[joint_rows].any():
         return None
     # the declarations
@@ -158,16 +171,24 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
                         if names[pos:pos + len(texts)].count(n) > 1), key, filename)
         tables[key] = table
         pos += len(texts)
-    others = units.other_declarations()
-    for (module, _routine), texts in others.items():
-        for text in texts:
-            match = _DECLARED.match(text)
-            if match is None:
-                return None
-            name = match.group(1).lower()
-            for (joint_module, joint_routine), table in tables.items():
-                if joint_module == module and name in table:
-                    _clash(name, (joint_module, joint_routine), filename)
+    # the names of the other new declarations (the robtargets' too): a clash where a new
+    # jointtarget of their module has it; in the way of a robtarget's name in their scope
+    # where they are not robtargets' (nor are the new jointtargets)
+    in_the_way: dict[tuple[str, str | None], dict[str, Any]] = {
+        scope: dict(table) for scope, table in tables.items()}
+    for robtargets, by_scope in ((False, units.other_declarations()),
+                                 (True, units.robtarget_declarations() if tables else {})):
+        for scope, texts in by_scope.items():
+            for text in texts:
+                match = _DECLARED.match(text)
+                if match is None:
+                    return None
+                name = match.group(1).lower()
+                for (joint_module, joint_routine), table in tables.items():
+                    if joint_module == scope[0] and name in table:
+                        _clash(name, (joint_module, joint_routine), filename)
+                if not robtargets:
+                    in_the_way.setdefault(scope, {})[name] = None
     # the statements' names, found in their scopes
     where = np.full(len(slots), -1, dtype=np.int64)
     for (module, routine), idents in units.statement_scopes():
@@ -185,14 +206,23 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
         if None in found:
             return None
         where[joint_idents] = found
-    if not _templates_move_to_their_name(dict.fromkeys(
+    if slots and is_joint.any() and not _templates_move_to_their_name(dict.fromkeys(
             map(itemgetter(0, 2), filter(None, slots)))):
         return None
+    targets = None
+    if target_rows.any():
+        at = np.flatnonzero(target_rows)
+        targets = _robtarget_targets(units, expected.motion[at], expected.slot[at],
+                                     in_the_way)
+    if targets is None:  # the kept instructions and their robtargets with everything else
+        if not is_joint.any():
+            return None
+        target_rows = np.zeros(k, dtype=bool)
     # everything else, on its own
-    text, order = units.text(others_only=True)
+    text, order = units.text(without=("joint",) if targets is None else ("joint", "robtarget"))
     local_id = np.full(len(slots), -1, dtype=np.int64)
     local_id[order] = np.arange(len(order))
-    rows = np.flatnonzero(~joint_rows)
+    rows = np.flatnonzero(~(joint_rows | target_rows))
     motion, slot = local_id[expected.motion[rows]], expected.slot[rows]
     other = read_targets_in_bulk(text, list(range(len(order))), motion, slot)
     if other is None:
@@ -209,7 +239,100 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
     joint = np.flatnonzero(joint_rows)
     out.joint[joint] = True
     out.robax[joint] = axes[where[expected.motion[joint]]]
+    if targets is not None:
+        at = np.flatnonzero(target_rows)
+        out.trans[at], out.rot[at], out.conf[at] = targets
     return out
+
+
+#: (trans (K,3), rot (K,4), conf (K,4)) of robtargets
+_Robtargets = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _robtarget_tables(units: CheckUnits
+                      ) -> tuple[dict[tuple[str, str | None], dict[str, int]], _Robtargets] | None:
+    """The robtarget declarations of the check units: per scope, name -> row (the first of
+    a name counts, as in the model), and the rows' values; None when one is not read
+    (`read_robtarget_declarations`)."""
+    declared = units.robtarget_declarations()
+    read = read_robtarget_declarations([t for texts in declared.values() for t in texts])
+    if read is None:
+        return None
+    names, *values = read
+    tables: dict[tuple[str, str | None], dict[str, int]] = {}
+    pos = 0
+    for key, texts in declared.items():
+        table = tables.setdefault(key, {})
+        deque(map(table.setdefault, names[pos:pos + len(texts)],
+                  range(pos, pos + len(texts))), maxlen=0)
+        pos += len(texts)
+    return tables, (values[0], values[1], values[2])
+
+
+def _robtarget_targets(units: CheckUnits, motion: np.ndarray, slot: np.ndarray,
+                       in_the_way: dict[tuple[str, str | None], dict[str, Any]]
+                       ) -> _Robtargets | None:
+    """The robtargets of checked rows (target `slot[i]` of statement `motion[i]`, each with
+    a TargetSlot): a name as RAPID finds it (the routine's data, then the module's) among
+    the robtarget declarations of the check units, a literal as written; None where a
+    declaration or a literal is not read (`read_robtarget_declarations`), a name is not
+    among them or is declared otherwise in its scope (`in_the_way`), or a statement's
+    text around its targets does not read them."""
+    robtargets = _robtarget_tables(units)
+    if robtargets is None:
+        return None
+    tables, values = robtargets
+    target_slots = units.target_slots()
+    first = np.full(len(target_slots), -1, dtype=np.int64)  # per statement: its first target
+    count = np.zeros(len(target_slots), dtype=np.int64)
+    found: list[np.ndarray] = []  # per scope, per target: its row in the values (-1: inline)
+    literals: list[str] = []
+    total = 0  # targets so far
+    for (module, routine), idents in units.statement_scopes():
+        idents = [i for i in idents if target_slots[i] is not None]
+        if not idents:
+            continue
+        texts = [target_slots[i][1::2] for i in idents]
+        sizes = np.fromiter(map(len, texts), np.int64, len(texts))
+        first[idents] = total + np.cumsum(sizes) - sizes
+        count[idents] = sizes
+        flat = [text for group in texts for text in group]
+        inline = np.fromiter((text[:1] == "[" for text in flat), bool, len(flat))
+        named = [text for text in flat if text[:1] != "["] if inline.any() else flat
+        literals += [text for text in flat if text[:1] == "["] if inline.any() else []
+        written = "\n".join(named)
+        lowered = written.lower().split("\n") if named else []
+        if not written.isascii() or len(lowered) != len(named):
+            return None
+        for scope in ((module, routine), (module, None)):  # names declared otherwise there
+            blocked = in_the_way.get(scope)
+            if blocked and not blocked.keys().isdisjoint(lowered):
+                return None
+        local = tables.get((module, routine), {})
+        rows = list(map(tables.get((module, None), {}).get, lowered))
+        if local:
+            rows = [local.get(name, at) for name, at in zip(lowered, rows)]
+        if None in rows:
+            return None
+        scope_rows = np.full(len(flat), -1, dtype=np.int64)
+        scope_rows[~inline] = rows
+        found.append(scope_rows)
+        total += len(flat)
+    if not _templates_read_their_robtargets(dict.fromkeys(
+            texts[0::2] for texts in target_slots if texts is not None)):
+        return None
+    trans, rot, conf = values
+    rows_of = np.concatenate(found) if found else np.zeros(0, dtype=np.int64)
+    if literals:
+        read = read_robtarget_literals(literals)
+        if read is None:
+            return None
+        rows_of[rows_of < 0] = trans.shape[0] + np.arange(len(literals))
+        trans, rot, conf = (np.concatenate([a, b]) for a, b in zip(values, read))
+    if ((slot >= count[motion]) | (first[motion] < 0)).any():
+        return None
+    at = rows_of[first[motion] + slot]
+    return trans[at], rot[at], conf[at]
 
 
 def _clash(name: str, scope: tuple[str, str | None], filename: str) -> None:
@@ -242,6 +365,40 @@ def _templates_move_to_their_name(templates: dict[tuple[str, str], None]) -> boo
             return False
     return bool(read.joint.all() and (read.robax == _TEMPLATE_AXES).all())
 
+
+def _templates_read_their_robtargets(templates: dict[tuple[str, ...], None]) -> bool:
+    """Each tuple of texts around a statement's targets, with a robtarget name in each
+    place between them, is one call whose targets read those names' robtargets, in
+    that order."""
+    if not templates:
+        return True
+    most = max(map(len, templates)) - 1
+    lines = ["MODULE RapidfixTemplates"]
+    lines += [f"CONST robtarget {_TEMPLATE_ROBTARGET}{j}:=[[{j + 1},0,0],[1,0,0,0],[0,0,0,0],"
+              "[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];" for j in range(most)]
+    lines.append("PROC t()")
+    motion: list[int] = []
+    slot: list[int] = []
+    for n, texts in enumerate(templates):
+        names = [f"{_TEMPLATE_ROBTARGET}{j}" for j in range(len(texts) - 1)]
+        lines.append("".join(part for pair in zip(texts, [*names, ""]) for part in pair))
+        motion += [n] * len(names)
+        slot += range(len(names))
+    lines += ["ENDPROC", "ENDMODULE", ""]
+    text = "\n".join(lines)
+    count = len(templates)
+    rows, which = np.asarray(motion, dtype=np.int64), np.asarray(slot, dtype=np.int64)
+    read = read_targets_in_bulk(text, list(range(count)), rows, which)
+    if read is None:
+        try:
+            program = parse_program(text, "templates")
+            if len(program.motions) != count:
+                return False
+            read = read_targets_full(program.motions, rows, which)
+        except RapidfixError:
+            return False
+    return bool(not read.joint.any() and (read.trans[:, 0] == which + 1).all()
+                and (read.trans[:, 1:] == 0).all())
 
 def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     """`read_back` through the full program model (`parse_units`)."""

@@ -47,6 +47,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     from rapidfix.rapid.readback import (
         ReadBack,
         read_jointtarget_declarations,
+        read_robtarget_declarations,
+        read_robtarget_literals,
         read_targets_full,
         read_targets_in_bulk,
     )
@@ -91,6 +93,8 @@ LAZY_EXPORTS = {
     "format_value": "format",
     "placeholders_in": "syntax_errors",
     "read_jointtarget_declarations": "readback",
+    "read_robtarget_declarations": "readback",
+    "read_robtarget_literals": "readback",
     "read_targets_full": "readback",
     "read_targets_in_bulk": "readback",
     "target_rows": "target_list",
@@ -144,6 +148,8 @@ __all__ = [
     "parse_program",
     "placeholders_in",
     "read_jointtarget_declarations",
+    "read_robtarget_declarations",
+    "read_robtarget_literals",
     "read_targets_full",
     "read_targets_in_bulk",
     "target_rows",

@@ -408,31 +408,48 @@ def robtarget_values(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarr
     """(trans (K,3), rot (K,4), conf (K,4)) of robtarget literals, as `_robtarget_value`
     reads each: those written without whitespace (what the rewrite writes) in one pass,
     any other one by one. Raises NotBulk where it does."""
-    match = _ROBTARGET_LITERAL.fullmatch
-    groups: list[str] = []
-    extax_ok: dict[str, bool] = {}
-    for text in texts:
-        m = match(text)
-        if m is None:  # written otherwise (spaces, a line break): all one by one, below
-            break
-        trans, rot, conf, extax = m.groups()
-        ok = extax_ok.get(extax)
-        if ok is None:
-            ok = extax_ok[extax] = _numbers(extax)
-        if not ok:
-            raise NotBulk
-        groups += (trans, rot, conf)
-    else:  # every one compact
-        try:
-            values = np.array(",".join(groups).split(","), dtype=float).reshape(-1, 11)
-        except ValueError:
-            raise NotBulk from None
-        if not np.isfinite(values[:, 7:]).all():  # a confdata fits_type refuses
-            raise NotBulk
-        return values[:, :3], values[:, 3:7], values[:, 7:]
+    compact = _compact_robtargets(texts)
+    if compact is not None:
+        return compact
     distinct = {text: _robtarget_value(text) for text in texts}
     trans, rot, conf = zip(*map(distinct.__getitem__, texts))
     return np.array(trans, dtype=float), np.array(rot, dtype=float), np.array(conf, dtype=float)
+
+
+# One robtarget literal as the rewrite writes it on each line of a text
+_ROBTARGET_LINES = re.compile(f"^{_ROBTARGET_LITERAL.pattern}$", re.MULTILINE)
+
+
+def _compact_robtargets(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """`robtarget_values` of literals all written without whitespace, found by one
+    regular-expression pass over them all; None when one is written otherwise."""
+    joined = "\n".join(texts)
+    if joined.count("\n") != len(texts) - 1:
+        return None
+    found = _ROBTARGET_LINES.findall(joined)
+    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
+        return None
+    return _robtarget_numbers(found)
+
+
+def _robtarget_numbers(found: list[tuple[str, str, str, str]]
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(trans, rot, conf) of robtargets whose groups of numbers `_ROBTARGET_LITERAL` found
+    ((trans, rot, conf, extax) texts each); NotBulk where a number is not one or a
+    confdata not finite."""
+    if not found:
+        return np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, 4))
+    trans, rot, conf, extax = zip(*found)
+    if not all(map(_numbers, set(extax))):
+        raise NotBulk
+    try:
+        values = [np.array(",".join(groups).split(","), dtype=float).reshape(-1, width)
+                  for groups, width in ((trans, 3), (rot, 4), (conf, 4))]
+    except ValueError:
+        raise NotBulk from None
+    if not np.isfinite(values[2]).all():  # a confdata fits_type refuses
+        raise NotBulk
+    return values[0], values[1], values[2]
 
 
 def _robtarget_value(text: str) -> tuple:
@@ -520,6 +537,52 @@ def read_jointtarget_declarations(texts: list[str]) -> tuple[list[str], np.ndarr
         return None
     return lowered, values
 
+
+# A robtarget declaration with a literal written as the rewrite writes it, on a line of
+# its own: a new one (`CONST robtarget ft_p1:=[[...],...];`) or one whose value was
+# replaced (the words before the value as the program wrote them, on one line; the
+# keywords and the type name in any case, as RAPID reads them).
+_ROBTARGET_DECLARATION = re.compile(
+    r"^(?i:(?:LOCAL[ \t]+)?(?:TASK[ \t]+)?(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+)"
+    rf"([A-Za-z][A-Za-z0-9_]*)[ \t]*:=[ \t]*{_ROBTARGET_LITERAL.pattern}[ \t]*;$",
+    re.MULTILINE)
+
+
+def read_robtarget_declarations(texts: list[str]
+                                ) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray] | None:
+    """The names (lower case) and (trans (K,3), rot (K,4), conf (K,4)) of robtarget
+    declarations each exactly `[LOCAL ][TASK ]CONST|PERS|VAR robtarget name:=literal;` with
+    the literal written without whitespace — checked by one regular-expression pass over
+    all of them, the numbers read as `robtarget_values` reads them —, or None when a text
+    is not of that form, a name is a keyword or a number is not one (the grammar, through
+    the full route, decides those)."""
+    if not texts:
+        return [], np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, 4))
+    joined = "\n".join(texts)
+    if joined.count("\n") != len(texts) - 1 or not joined.isascii():
+        return None
+    found = _ROBTARGET_DECLARATION.findall(joined)
+    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
+        return None
+    lowered = "\n".join([match[0] for match in found]).lower().split("\n")
+    if not reserved_words().isdisjoint(lowered):
+        return None
+    try:
+        trans, rot, conf = _robtarget_numbers([match[1:] for match in found])
+    except NotBulk:
+        return None
+    return lowered, trans, rot, conf
+
+
+def read_robtarget_literals(texts: list[str]
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(trans (K,3), rot (K,4), conf (K,4)) of robtarget literals each written without
+    whitespace (what the rewrite writes), read as `robtarget_values` reads them; None
+    when one is written otherwise or a number is not one (the full route decides)."""
+    try:
+        return _compact_robtargets(texts)
+    except NotBulk:
+        return None
 
 def _numbers(group: str) -> bool:
     try:

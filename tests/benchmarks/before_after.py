@@ -18,6 +18,10 @@ timed steps for both trees, and checks that both wrote the same bytes. The sets:
   at 200,000 lines, `named` at 60,000 and the odd shapes `five_axis` and `feeds` at
   20,000 (programs below the compiled kernels' threshold); timed the parse, the plan,
   the path check and the emission.
+- kept: instructions kept with filtered robtargets: the odd shape `arc_weld` (its weld
+  moves have no joint-target form) at 100,000 lines, `named` and `inline` at 200,000
+  and `movec` and the odd shape `scoped` at 100,000 with `--emit robtargets`; timed the
+  emission and the read-back.
 - odd: the odd shapes slowest per line at 100,000 lines (arithmetic in the robtargets,
   records in Offs arguments, statements stacked on IF lines, a distinct argument tail
   per move, conditions, switches before the target, whitespace inside the targets,
@@ -64,6 +68,13 @@ CASES = {
         ("five_axis 20k", "five_axis", 20_000, True, "jointtargets"),
         ("feeds 20k", "feeds", 20_000, True, "jointtargets"),
     ),
+    "kept": (
+        ("arc_weld 100k", "arc_weld", 100_000, True, "jointtargets"),
+        ("named 200k robtargets", "named", 200_000, False, "robtargets"),
+        ("inline 200k robtargets", "inline", 200_000, False, "robtargets"),
+        ("movec 100k robtargets", "movec", 100_000, False, "robtargets"),
+        ("scoped 100k robtargets", "scoped", 100_000, True, "robtargets"),
+    ),
     "odd": (
         ("expressions 100k", "expressions", 100_000, True, "jointtargets"),
         ("records 100k", "records", 100_000, True, "jointtargets"),
@@ -88,6 +99,8 @@ _TIMED = {
                       "emit_edits")),
     "odd": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
                  ("parse_owned|parse_program", "plan_program", "emit_edits")),
+    "kept": tuple(("rapidfix.postprocess.rewrite", None, name) for name in
+                  ("emit_edits", "read_back")),
 }
 
 

@@ -488,3 +488,202 @@ def test_statements_added_one_by_one_or_in_runs_give_the_same_check_program():
         assert units.statement_scopes() == list(scopes.items())
         _, motions = units.parse("x.mod")
         assert [m.target.name for m in motions] == [t.split()[1][:-1] for _, _, t in plan]
+
+
+# ------------------------------------------------- kept instructions, robtargets as columns
+_LIT = ("[[100,200,300],[1,0,0,0],[0,0,0,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]",
+        "[[-1.5,2.25,.5],[0.5,0.5,0.5,0.5],[-1,0,-1,4],[0,0,0,0,0,0]]",
+        "[[7,8,9],[0,1,0,0],[1,1,1,1],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]")
+_ROB_DECLS = {("M", None): [f"CONST robtarget p1:={_LIT[0]};",
+                            f"LOCAL PERS RobTarget  P2 := {_LIT[1]} ;"],
+              ("M", "p"): [f"VAR robtarget p1:={_LIT[2]};"]}  # p1 of routine p
+_KEPT = [("ArcL ", "p1", ",v100,seam1,weld1\\Weave:=weave1,z1,tWeld;"),  # routine p: p's p1
+         ("MoveL ", _LIT[1], ", v100, fine, tool0 \\WObj:=w;"),          # inline
+         ("MoveC ", "p2", ",", "P1", ",v100,z1,tool0;"),                # CirPoint, ToPoint
+         ("SearchL\\Stop, sensor, pFound, ", "p2", ", v100, tool0;")]  # target not first
+
+
+def _kept_units(declarations, statements, routine="p"):
+    from rapidfix.postprocess.reparse_changes import CheckUnits
+
+    units = CheckUnits()
+    for (module, scope), texts in declarations.items():
+        units.add_robtarget_declarations(module, scope, texts)
+    units.add_statements(["M"] * len(statements), [routine] * len(statements),
+                         ["".join(slot) for slot in statements], target_slots=statements)
+    return units
+
+
+def _kept_expected(statements):
+    from rapidfix.postprocess.placement import Placement
+    from rapidfix.postprocess.verify import Expected
+
+    motion = [n for n, slot in enumerate(statements) for _ in slot[1::2]]
+    slot = [j for texts in statements for j in range(len(texts[1::2]))]
+    eye = np.repeat(np.eye(4)[None], len(motion), 0)
+    return Expected(np.array(motion), np.array(slot), np.zeros((len(motion), 3)),
+                    Placement(eye, eye, eye), None, None)
+
+
+def test_kept_instructions_are_read_as_columns_as_the_full_route_reads_them():
+    from rapidfix.postprocess.verify import _read_columns, read_back
+
+    units, expected = _kept_units(_ROB_DECLS, _KEPT), _kept_expected(_KEPT)
+    columns = _read_columns(units, expected, "x.mod")
+    assert columns is not None and not columns.joint.any()
+    _same_read(columns, read_back_full(units, "x.mod", expected))  # the independent route
+    # p1 in routine p is the routine's own; P1 and p1 are one name; the MoveC reads its
+    # circle point and then its destination
+    assert columns.trans.tolist() == [[7, 8, 9], [-1.5, 2.25, 0.5], [-1.5, 2.25, 0.5],
+                                      [7, 8, 9], [-1.5, 2.25, 0.5]]
+    assert columns.conf.tolist()[1] == [-1, 0, -1, 4]
+    _same_read(read_back(units, "x.mod", expected), columns)
+
+
+@pytest.mark.parametrize("declarations, statements", [
+    # written otherwise: the parser decides, and reads the same
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0]}; ! taught"]}, _KEPT[:1]),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0].replace(',', ', ')};"]}, _KEPT[:1]),
+    ({("M", None): [f"CONST robtarget p1:=\n  {_LIT[0]};"]}, _KEPT[:1]),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0]};"]},
+     [("MoveL ", _LIT[1].replace(",", ", "), ", v100, z1, tool0;")]),
+    # a keyword as a name: the grammar decides
+    ({("M", None): [f"CONST robtarget if:={_LIT[0]};"]},
+     [("ArcL ", "if", ",v100,seam1,weld1,z1,tWeld;")]),
+])
+def test_robtargets_written_otherwise_are_read_as_the_full_route_reads_them(
+        declarations, statements):
+    from rapidfix.postprocess.verify import read_back
+
+    units, expected = _kept_units(declarations, statements), _kept_expected(statements)
+    _same_read(read_back(units, "x.mod", expected),
+               read_back_full(units, "x.mod", expected))
+
+
+def test_a_name_declared_otherwise_in_the_routine_is_not_read_from_the_module():
+    from rapidfix.postprocess.verify import _read_columns, read_back
+
+    units = _kept_units({("M", None): [f"CONST robtarget p1:={_LIT[0]};"]}, _KEPT[:1])
+    units.add_declaration("M", "p", f"PERS robtarget p1:={_LIT[2]}; ! the routine's own")
+    expected = _kept_expected(_KEPT[:1])
+    assert _read_columns(units, expected, "x.mod") is None
+    assert read_back(units, "x.mod", expected).trans.tolist() == [[7, 8, 9]]
+
+
+@pytest.mark.parametrize("declarations, statements, message", [
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0]};"]},
+     [("ArcL ", "p9", ",v100,seam1,weld1,z1,tWeld;")], "cannot be read back"),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0][:-1]};"]}, _KEPT[:1], "does not parse"),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0].replace('100', '1.0.0')};"]}, _KEPT[:1],
+     "does not parse"),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0]};"]},
+     [("ArcL ", "p1", ",v100,seam1,weld1,z1,tWeld")], "does not parse"),
+    ({("M", None): [f"CONST robtarget p1:={_LIT[0]};"]},
+     [("ArcL ", "p1", ",v100,seam1,weld1,z1,tWeld; MoveL p1,v1,z1,tool0;")],
+     "motion instructions"),
+    ({}, [("MoveL ", _LIT[0].replace("[[", "[[[", 1), ",v1,z1,tool0;")], "does not parse"),
+])
+def test_the_read_back_of_kept_instructions_stops_a_broken_statement_declaration_or_name(
+        declarations, statements, message):
+    from rapidfix.postprocess.verify import read_back
+
+    with pytest.raises((RapidSemanticError, ValueError), match=message):
+        read_back(_kept_units(declarations, statements), "x.mod", _kept_expected(statements))
+
+
+@pytest.mark.parametrize("shape, emit", [("arc_weld", "jointtargets"), ("feeds", "robtargets"),
+                                         ("named", "robtargets"), ("movec", "robtargets"),
+                                         ("scoped", "robtargets")])
+def test_kept_instructions_of_a_program_are_read_back_as_columns(monkeypatch, comp, shape,
+                                                                 emit):
+    """The arc-welding cell (its weld moves keep their instructions), and programs
+    rewritten with filtered robtargets: their targets are read as columns (no statement
+    nor declaration parsed but one per distinct text around the targets), the values
+    those of the full route."""
+    from odd_shapes import ODD_SHAPES, odd_moves
+    from program_shapes import shape_moves
+
+    parsed: list[tuple[str, int]] = []  # (text, how many statements) of each parse
+    real = verify_module.read_targets_in_bulk
+
+    def spy(text, order, *args):
+        parsed.append((text, len(order)))
+        return real(text, order, *args)
+
+    monkeypatch.setattr(verify_module, "read_targets_in_bulk", spy)
+    monkeypatch.setattr(verify_module, "read_back_full", None)  # never the full route
+    data = (odd_moves if shape in ODD_SHAPES else shape_moves)(shape, 120).encode()
+    result, captured = _rewrite_capturing_units(monkeypatch, data, "t.mod", comp,
+                                                RewriteOptions(emit=emit))
+    assert result.moves_compensated >= 60  # (movec: 120 moves are 80 instructions)
+    units = captured["units"]
+    slots = [slot for slot in units.target_slots() if slot is not None]
+    assert len(slots) >= 60
+    declared = [t for texts in units.robtarget_declarations().values() for t in texts]
+    assert declared or shape == "feeds"  # feeds: its targets are inline
+    assert not any(decl in text for text, _ in parsed for decl in declared)
+    templates = len({slot[0::2] for slot in slots})
+    moves = {(slot[0], slot[2]) for slot in units.joint_slots() if slot is not None}
+    assert sum(count for _, count in parsed) <= templates + len(moves)  # distinct texts only
+    assert templates < len(slots) or shape == "feeds"  # feeds: a speed of its own a move
+    _same_read(captured["read"], read_back_full(units, "t.mod", captured["expected"]))
+
+
+_NUMBER = st.one_of(st.integers(-2000, 2000).map(str),
+                    st.floats(-2000, 2000, allow_nan=False).map(lambda v: f"{v:.4f}"),
+                    st.sampled_from(["0", "-0", ".5", "1.", "1E+3", "9E+09", "1e-2", "+2"]))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(
+    st.sampled_from(["CONST", "PERS", "VAR", "LOCAL CONST", "TASK PERS", "local task pers"]),
+    st.sampled_from(["robtarget", "RobTarget"]),
+    st.sampled_from([":=", " := ", ":=  "]),
+    st.lists(_NUMBER, min_size=17, max_size=17),
+    st.sampled_from(["", ", ", "!"]),    # how the literal is written: compact, spaced, noted
+    st.booleans()),                        # the statement names it, or holds it inline
+    min_size=1, max_size=6))
+def test_kept_instructions_read_back_as_the_full_route_reads_them(rows):
+    """Declarations and statements of kept instructions in the forms a rewrite may leave
+    (the words before a replaced value as a program wrote them), with numbers as RAPID
+    writes them: the read-back (in columns where it takes them) reads what the full
+    parse of the same text reads, or both refuse it."""
+    from rapidfix.postprocess.verify import read_back
+
+    declarations, statements = [], []
+    for n, (storage, type_name, assign, numbers, style, inline) in enumerate(rows):
+        groups = (numbers[:3], numbers[3:7], numbers[7:11], numbers[11:])
+        literal = "[" + ",".join("[" + ",".join(g) + "]" for g in groups) + "]"
+        if style == ", ":
+            literal = literal.replace(",", ", ")
+        note = " ! taught" if style == "!" else ""
+        if inline:
+            statements.append(("MoveL ", literal, ",v100,z1,tool0;"))
+        else:
+            declarations.append(f"{storage} {type_name} p{n}{assign}{literal};{note}")
+            statements.append(("MoveL ", f"p{n}", ",v100,z1,tool0;"))
+    units = _kept_units({("M", None): declarations}, statements)
+    expected = _kept_expected(statements)
+    try:
+        full = read_back_full(units, "x.mod", expected)
+    except (RapidSemanticError, ValueError) as err:
+        with pytest.raises(type(err)):
+            read_back(units, "x.mod", expected)
+        return
+    _same_read(read_back(units, "x.mod", expected), full)
+
+
+def test_robtargets_not_read_as_columns_leave_the_jointtargets_to_the_columns():
+    """A replaced declaration written over two lines is parsed with everything the columns
+    do not take; the MoveAbsJ statements beside it are still read as columns."""
+    from rapidfix.postprocess.verify import _read_columns
+
+    units = _units(_DECLS, _MOVES)
+    units.add_robtarget_declarations("M", None, [f"CONST robtarget p1:=\n  {_LIT[0]};"])
+    units.add_statements(["M"], ["p"], ["".join(_KEPT[0])], target_slots=[_KEPT[0]])
+    expected = _expected(4)
+    columns = _read_columns(units, expected, "x.mod")
+    assert columns is not None
+    _same_read(columns, read_back_full(units, "x.mod", expected))
+    assert columns.joint.tolist() == [True, True, True, False]
+    assert columns.trans[3].tolist() == [100, 200, 300]
