@@ -106,6 +106,7 @@ def _target_slot(text: str, syntax: Any, spans: list[Any], targets: list[str], s
     parts.append(keep(text[at:syntax.end], text[at:syntax.end]))
     return tuple(parts) if "".join(parts) == statement else None
 
+
 def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tuple]:
     """The edits of a statement to a point inserted before `motion`: the optional
     arguments it drops (INTERMEDIATE_DROPS) and, with `zone`, its zone made

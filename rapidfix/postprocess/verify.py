@@ -78,8 +78,9 @@ def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
 def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     """Parse the rewritten parts and read the target of every expected pose from them.
 
-    The MoveAbsJ statements and jointtarget declarations the emission made as columns
-    are read as columns (`_read_columns`); rewritten parts made of simple statements
+    The MoveAbsJ statements and jointtarget declarations, and the instructions kept with
+    filtered robtargets and their robtarget declarations, that the emission made as
+    columns are read as columns (`_read_columns`); rewritten parts made of simple statements
     only are read in bulk (`rapidfix.rapid.readback`: Lark parses them with the same
     grammar, and the values are read once per run); anything else, and anything those
     readers do not take, goes the full route through the program model, which also
