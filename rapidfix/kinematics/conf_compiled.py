@@ -108,6 +108,19 @@ def _wrist_sides(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: tuple, fwd0: t
     return ahead1, side
 
 
+
+@njit(cache=True)
+def wrist_sides_rows(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: np.ndarray,
+                     fwd0: np.ndarray, side_sign: float, out: np.ndarray) -> None:
+    """`_wrist_sides` of every joint vector of q (M, 6) into out (M, 2): what
+    `confdata.conf_quantities` measures of the wrist centre, in one pass."""
+    centre = (c0[0], c0[1], c0[2])
+    forward = (fwd0[0], fwd0[1], fwd0[2])
+    for i in range(q.shape[0]):
+        ahead1, side = _wrist_sides(q[i], w, r, centre, forward, side_sign)
+        out[i, 0] = ahead1
+        out[i, 1] = side
+
 @njit(cache=True)
 def _matches(q: np.ndarray, ahead1: float, side: float, conf: np.ndarray, tol: float,
              tol_mm: float) -> bool:

@@ -18,7 +18,7 @@ from rapidfix.exceptions import KinematicsError
 from rapidfix.kinematics.batches import as_joint_batch
 from rapidfix.kinematics.ik_analytic import wrist_centre
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
-from rapidfix.kinematics.screws import product_of_exponentials
+from rapidfix.kinematics.screws import forward_is_compiled, product_of_exponentials
 
 if TYPE_CHECKING:
     from rapidfix.kinematics.robot_model import RobotModel
@@ -39,7 +39,9 @@ both sides (the cfx bits 4 and 2), for the same reason as CONF_TOL."""
 
 def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     """Signed quantities (..., 6) behind confdata: θ1, θ4, θ6 (rad), wrist centre ahead of
-    axis 1 (mm), wrist centre ahead of the lower arm line (mm), θ5 (rad)."""
+    axis 1 (mm), wrist centre ahead of the lower arm line (mm), θ5 (rad). Inside
+    `screws.compiled_forward` the wrist centre's distances come from the compiled kernel
+    (`conf_compiled.wrist_sides_rows`), which `select_by_conf` uses too."""
     q = np.asarray(q, dtype=float)
     flat = q.reshape(-1, 6)
     finite = np.all(np.isfinite(flat), axis=1)
@@ -47,6 +49,21 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     nominal = model.nominal
     w, r = model.axis_dirs, model.axis_points
     c0 = wrist_centre(nominal)
+    kernel = load_kernel("rapidfix.kinematics.conf_compiled") \
+        if flat.shape[0] >= _COMPILED_FROM and forward_is_compiled() else None
+    if kernel is not None:  # the same quantities to rounding (~1e-13 mm), in one pass
+        w = np.ascontiguousarray(w, dtype=float)
+        r = np.ascontiguousarray(r, dtype=float)
+        fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
+        fwd0 /= np.linalg.norm(fwd0)
+        side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+        sides = np.empty((flat.shape[0], 2))
+        kernel.wrist_sides_rows(safe, w, r, np.asarray(c0, dtype=float), fwd0,
+                                float(np.sign(side0)) if side0 != 0 else 1.0, sides)
+        out = np.stack([safe[:, 0], safe[:, 3], safe[:, 5], sides[:, 0], sides[:, 1],
+                        safe[:, 4]], axis=1)
+        out[~finite] = np.nan
+        return out.reshape((*q.shape[:-1], 6))
     # only the arm's three axes place the wrist centre
     arm3, prefix = product_of_exponentials(w[:3], r[:3], np.eye(4), safe[:, :3])
     R, t = arm3[:, :3, :3], arm3[:, :3, 3]  # e^{S1θ1} e^{S2θ2} e^{S3θ3}

@@ -352,19 +352,10 @@ def _templates_move_to_their_name(templates: dict[tuple[str, str], None]) -> boo
              f"CONST jointtarget {_TEMPLATE_NAME}:=[[{axes}],[0,0,0,0,0,0]];", "PROC t()"]
     lines += [f"{head}{_TEMPLATE_NAME}{tail}" for head, tail in templates]
     lines += ["ENDPROC", "ENDMODULE", ""]
-    text = "\n".join(lines)
     count = len(templates)
-    motion, slot = np.arange(count), np.zeros(count, dtype=np.int64)
-    read = read_targets_in_bulk(text, list(range(count)), motion, slot)
-    if read is None:
-        try:
-            program = parse_program(text, "templates")
-            if len(program.motions) != count:
-                return False
-            read = read_targets_full(program.motions, motion, slot)
-        except RapidfixError:
-            return False
-    return bool(read.joint.all() and (read.robax == _TEMPLATE_AXES).all())
+    read = _read_templates("\n".join(lines), count, np.arange(count),
+                           np.zeros(count, dtype=np.int64))
+    return read is not None and bool(read.joint.all() and (read.robax == _TEMPLATE_AXES).all())
 
 
 def _templates_read_their_robtargets(templates: dict[tuple[str, ...], None]) -> bool:
@@ -386,20 +377,28 @@ def _templates_read_their_robtargets(templates: dict[tuple[str, ...], None]) -> 
         motion += [n] * len(names)
         slot += range(len(names))
     lines += ["ENDPROC", "ENDMODULE", ""]
-    text = "\n".join(lines)
-    count = len(templates)
-    rows, which = np.asarray(motion, dtype=np.int64), np.asarray(slot, dtype=np.int64)
-    read = read_targets_in_bulk(text, list(range(count)), rows, which)
+    which = np.asarray(slot, dtype=np.int64)
+    read = _read_templates("\n".join(lines), len(templates),
+                           np.asarray(motion, dtype=np.int64), which)
+    return read is not None and bool(not read.joint.any() and (read.trans[:, 0] == which + 1).all()
+                                     and (read.trans[:, 1:] == 0).all())
+
+
+def _read_templates(text: str, count: int, motion: np.ndarray, slot: np.ndarray
+                    ) -> ReadBack | None:
+    """Target `slot[i]` of statement `motion[i]` of a template program of `count`
+    statements (in bulk, else through the full model); None when it does not parse or
+    its statements are not `count` motions."""
+    read = read_targets_in_bulk(text, list(range(count)), motion, slot)
     if read is None:
         try:
             program = parse_program(text, "templates")
             if len(program.motions) != count:
-                return False
-            read = read_targets_full(program.motions, rows, which)
+                return None
+            read = read_targets_full(program.motions, motion, slot)
         except RapidfixError:
-            return False
-    return bool(not read.joint.any() and (read.trans[:, 0] == which + 1).all()
-                and (read.trans[:, 1:] == 0).all())
+            return None
+    return read
 
 def read_back_full(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     """`read_back` through the full program model (`parse_units`)."""

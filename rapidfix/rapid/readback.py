@@ -423,13 +423,29 @@ _ROBTARGET_LINES = re.compile(f"^{_ROBTARGET_LITERAL.pattern}$", re.MULTILINE)
 def _compact_robtargets(texts: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """`robtarget_values` of literals all written without whitespace, found by one
     regular-expression pass over them all; None when one is written otherwise."""
+    found = _by_line(_ROBTARGET_LINES, texts)
+    return None if found is None else _robtarget_numbers(found)
+
+
+def _by_line(pattern: re.Pattern[str], texts: list[str]) -> list[Any] | None:
+    """The groups of `pattern` (anchored at a line's start and end) in each text, found by
+    one pass over them all; None when a text holds a line break or does not match."""
     joined = "\n".join(texts)
     if joined.count("\n") != len(texts) - 1:
         return None
-    found = _ROBTARGET_LINES.findall(joined)
-    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
+    found = pattern.findall(joined)
+    return found if len(found) == len(texts) else None  # one match per line: every line
+
+
+def _declarations_by_line(pattern: re.Pattern[str], texts: list[str]
+                          ) -> tuple[list[Any], list[str]] | None:
+    """`_by_line` of declarations written in ASCII whose first group is the declared name,
+    and those names in lower case; None also where a name is a keyword."""
+    found = _by_line(pattern, texts) if all(map(str.isascii, texts)) else None
+    if found is None:
         return None
-    return _robtarget_numbers(found)
+    lowered = "\n".join([match[0] for match in found]).lower().split("\n")
+    return None if not reserved_words().isdisjoint(lowered) else (found, lowered)
 
 
 def _robtarget_numbers(found: list[tuple[str, str, str, str]]
@@ -517,16 +533,11 @@ def read_jointtarget_declarations(texts: list[str]) -> tuple[list[str], np.ndarr
     (the grammar, through the full route, decides those)."""
     if not texts:
         return [], np.zeros((0, 6))
-    joined = "\n".join(texts)
-    if joined.count("\n") != len(texts) - 1 or not joined.isascii():
+    read = _declarations_by_line(_JOINTTARGET_DECLARATION, texts)
+    if read is None:
         return None
-    found = _JOINTTARGET_DECLARATION.findall(joined)
-    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
-        return None
-    names, robax, extax = zip(*found)
-    lowered = "\n".join(names).lower().split("\n")
-    if not reserved_words().isdisjoint(lowered):
-        return None
+    found, lowered = read
+    _names, robax, extax = zip(*found)
     numbers = ",".join(robax).split(",")
     try:
         values = np.fromiter(map(float, numbers), float, len(numbers)).reshape(-1, 6)
@@ -558,15 +569,10 @@ def read_robtarget_declarations(texts: list[str]
     the full route, decides those)."""
     if not texts:
         return [], np.zeros((0, 3)), np.zeros((0, 4)), np.zeros((0, 4))
-    joined = "\n".join(texts)
-    if joined.count("\n") != len(texts) - 1 or not joined.isascii():
+    read = _declarations_by_line(_ROBTARGET_DECLARATION, texts)
+    if read is None:
         return None
-    found = _ROBTARGET_DECLARATION.findall(joined)
-    if len(found) != len(texts):  # one match per line, anchored at both ends: every line
-        return None
-    lowered = "\n".join([match[0] for match in found]).lower().split("\n")
-    if not reserved_words().isdisjoint(lowered):
-        return None
+    found, lowered = read
     try:
         trans, rot, conf = _robtarget_numbers([match[1:] for match in found])
     except NotBulk:

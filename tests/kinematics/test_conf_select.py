@@ -203,3 +203,42 @@ def test_compiled_choice_is_the_numpy_choice(name, variant, seed):
     assert np.array_equal(got_status, want_status)
     assert np.array_equal(np.isnan(got_q), np.isnan(want_q))
     assert np.array_equal(np.nan_to_num(got_q), np.nan_to_num(want_q))
+
+
+@pytest.mark.parametrize("name", available_robots())
+def test_compiled_conf_quantities_are_numpys_to_rounding(name, monkeypatch):
+    """Inside `compiled_forward` the wrist centre's distances behind cfx come from the
+    compiled kernel (where numba is installed): numpy's to rounding (1e-9 mm), the angles
+    the same numbers, a joint vector with a NaN all NaN; the confdata of awkward targets'
+    solutions and of random joints the same."""
+    from rapidfix.compiled import load_kernel
+    from rapidfix.kinematics.confdata import conf_quantities, confdata
+    from rapidfix.kinematics.screws import compiled_forward
+
+    calls = []
+    kernel = load_kernel("rapidfix.kinematics.conf_compiled")
+    if kernel is not None:
+        real = kernel.wrist_sides_rows
+        monkeypatch.setattr(kernel, "wrist_sides_rows",
+                            lambda *args: calls.append(len(args[0])) or real(*args))
+    robot = load_robot(name)
+    rng = np.random.default_rng(7)
+    lo, hi = np.asarray(robot.limits, dtype=float).T
+    q = rng.uniform(lo, hi, (500, 6))
+    T, _ = awkward_targets(robot, rng, 300)
+    solved = robot.ik(T).q.reshape(-1, 6)
+    q = np.concatenate([q, solved[np.isfinite(solved).all(axis=1)]])
+    with_nan = q.copy()
+    with_nan[3, 2] = np.nan
+    want = conf_quantities(robot, with_nan)
+    assert not calls  # outside the block: numpy's
+    with compiled_forward():
+        got = conf_quantities(robot, with_nan)
+        got_conf = confdata(robot, q)
+    assert calls == ([len(q)] * 2 if accelerated() else [])
+    assert np.isnan(got[3]).all() and np.isnan(want[3]).all()
+    keep = np.ones(len(q), dtype=bool)
+    keep[3] = False
+    assert np.array_equal(got[keep][:, [0, 1, 2, 5]], want[keep][:, [0, 1, 2, 5]])
+    assert np.allclose(got[keep][:, 3:5], want[keep][:, 3:5], rtol=0, atol=1e-9)
+    assert np.array_equal(got_conf, confdata(robot, q))
