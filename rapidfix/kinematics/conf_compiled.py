@@ -108,7 +108,6 @@ def _wrist_sides(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: tuple, fwd0: t
     return ahead1, side
 
 
-
 @njit(cache=True)
 def wrist_sides_rows(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: np.ndarray,
                      fwd0: np.ndarray, side_sign: float, out: np.ndarray) -> None:
@@ -120,6 +119,7 @@ def wrist_sides_rows(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: np.ndarray
         ahead1, side = _wrist_sides(q[i], w, r, centre, forward, side_sign)
         out[i, 0] = ahead1
         out[i, 1] = side
+
 
 @njit(cache=True)
 def _matches(q: np.ndarray, ahead1: float, side: float, conf: np.ndarray, tol: float,

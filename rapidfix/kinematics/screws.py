@@ -28,11 +28,11 @@ def compiled_forward() -> AbstractContextManager[None]:
     return _COMPILED.on()
 
 
-
 def forward_is_compiled() -> bool:
     """Whether the current block asked for the compiled kinematics (`compiled_forward`)
     and they are at hand (numba installed, RAPIDFIX_IK_BACKEND not numpy)."""
     return _COMPILED.get() and _kernel() is not None
+
 
 def _kernel() -> ModuleType | None:
     """The compiled product of exponentials, or None: numba not installed, or

@@ -590,6 +590,7 @@ def read_robtarget_literals(texts: list[str]
     except NotBulk:
         return None
 
+
 def _numbers(group: str) -> bool:
     try:
         tuple(map(float, group.split(",")))
