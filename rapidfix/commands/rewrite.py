@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -159,6 +161,35 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
         raise RapidfixError(f"{flag} {err.detail}") from None
 
 
+#: a program at least this large (bytes, about 10,000 lines) shows the step its rewrite is
+#: at, on a terminal: a million lines take a minute
+STEP_BAR_FROM_BYTES = 1_000_000
+
+
+@contextmanager
+def step_bar(source: Path) -> Iterator[Callable[[str], None] | None]:
+    """A progress callback showing the rewrite's steps on standard error (`rewrite.STEPS`),
+    or None: not a terminal (no bars in logs), or a program too small to wait for."""
+    try:
+        large = source.stat().st_size >= STEP_BAR_FROM_BYTES
+    except OSError:  # the rewrite reports it
+        large = False
+    if not (large and sys.stderr.isatty()):
+        yield None
+        return
+    from tqdm import tqdm
+
+    from rapidfix.postprocess.rewrite import STEPS
+
+    with tqdm(total=len(STEPS), initial=1, desc=f"rapidfix rewrite: {STEPS[0]}", leave=False,
+              bar_format="{desc} (step {n_fmt} of {total_fmt}, {elapsed})") as bar:
+        def progress(step: str) -> None:  # six steps: each one shown as it starts
+            bar.n = STEPS.index(step) + 1
+            bar.set_description_str(f"rapidfix rewrite: {step}")
+
+        yield progress
+
+
 def run(args: argparse.Namespace) -> int:
     """Rewrite one program; print the skipped targets and the predicted deviation."""
     from rapidfix.postprocess import (
@@ -194,7 +225,9 @@ def run(args: argparse.Namespace) -> int:
             for name, why in unread:  # what they declare is unknown to this program
                 print(f"rapidfix: warning: {name}: this module of the task is not read for "
                       f"its declarations: {why}", file=sys.stderr)
-        result = rewrite_file(source, target, comp, options, in_place=args.in_place)
+        with step_bar(source) as progress:
+            result = rewrite_file(source, target, comp, options, in_place=args.in_place,
+                                  progress=progress)
     except RapidfixError as err:
         reword(err)
         raise

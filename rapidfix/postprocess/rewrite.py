@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -343,18 +343,33 @@ def _strip_old_header(editor: Editor, text: str) -> None:
 
 
 # ---------------------------------------------------------------------------- API
+#: the steps a rewrite reports to its `progress` callback, in order (`rewrite_file` reports
+#: the last)
+STEPS = ("reading the program", "planning", "checking the paths", "writing the edits",
+         "reading the output back", "writing the file")
+
+
+def _no_progress(_step: str) -> None:
+    pass
+
+
 def rewrite_source(
-    data: bytes, filename: str, comp: Compensator, options: RewriteOptions
+    data: bytes, filename: str, comp: Compensator, options: RewriteOptions,
+    progress: Callable[[str], None] | None = None,
 ) -> RewriteResult:
-    """Compensate one program given as bytes; returns the new bytes and what was done."""
-    return _rewrite_owned([data], filename, comp, options)
+    """Compensate one program given as bytes; returns the new bytes and what was done.
+    `progress` is called with each of the first five `STEPS` as it starts."""
+    return _rewrite_owned([data], filename, comp, options, progress)
 
 
 def _rewrite_owned(handed: list[bytes], filename: str, comp: Compensator,
-                   options: RewriteOptions) -> RewriteResult:
+                   options: RewriteOptions,
+                   progress: Callable[[str], None] | None = None) -> RewriteResult:
     """`rewrite_source` of the bytes `handed` holds, taken out of it: when the caller
     keeps no other reference, a large file's bytes are let go of once decoded."""
+    step = progress or _no_progress
     with cyclic_gc_paused():
+        step(STEPS[0])
         digest = sha256_bytes(handed[0])
         program = parse_owned(handed, filename)
         work = kernel_work(program)
@@ -364,7 +379,7 @@ def _rewrite_owned(handed: list[bytes], filename: str, comp: Compensator,
         models = [program]
         del program
         with _kernels_for(work):
-            return _rewrite(models, digest, filename, comp, options)
+            return _rewrite(models, digest, filename, comp, options, step)
 
 
 def kernel_work(program: Program) -> int:
@@ -392,7 +407,8 @@ def _kernels_for(work: int) -> Iterator[None]:
 
 
 def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensator,
-             options: RewriteOptions) -> RewriteResult:
+             options: RewriteOptions, step: Callable[[str], None] = _no_progress
+             ) -> RewriteResult:
     """The steps after parsing; `handed` holds the program model, taken out here;
     `digest` is the input's SHA-256."""
     program = handed.pop()
@@ -403,11 +419,14 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
             file=filename,
             hint="use RewriteOptions(force=True) to compensate it again",
         )
+    step(STEPS[1])
     planned = plan_program(program, comp, options.emit,
                            temperature_c=options.temperature_c, approach=options.approach)
+    step(STEPS[2])
     refined = refine_paths(program, comp.model, comp.robot, planned,
                            options.path_tolerance_mm, options.emit)
     planned, refined = _after_path_check(planned, refined)
+    step(STEPS[3])
     emission = emit_edits(program, comp, planned, refined)
     skipped = [Skipped(site.where, site.label, site.reason)
                for site in planned.sites if site.reason is not None]
@@ -452,6 +471,7 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
     del program, planned, refined, emission
     output = editor.render()
     del editor
+    step(STEPS[4])
     read = read_back(units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
     worst = float(deviation.max()) if deviation.size else None
@@ -492,10 +512,12 @@ def rewrite_file(
     *,
     in_place: bool = False,
     name: str | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> RewriteResult:
     """Rewrite `source` into `target` atomically; the input is only replaced with in_place
     (a backup is written first). With strict options and skipped targets nothing is written.
-    `name` is how messages call the file (default: the source path)."""
+    `name` is how messages call the file (default: the source path); `progress` is called
+    with each of `STEPS` as it starts."""
     source, target = Path(source), Path(target)
     same = target.exists() and source.exists() and target.resolve() == source.resolve()
     if same and not in_place:
@@ -506,9 +528,10 @@ def rewrite_file(
     # once decoded (a large file is not held twice while its model is built and used)
     handed = [source.read_bytes()]
     data = handed[0] if in_place else None
-    result = _rewrite_owned(handed, name or str(source), comp, options)
+    result = _rewrite_owned(handed, name or str(source), comp, options, progress)
     if result.skipped and options.strict:
         return result
+    (progress or _no_progress)(STEPS[5])
     if data is not None:
         backup = backup_path(source)
         write_bytes_atomic(backup, data)

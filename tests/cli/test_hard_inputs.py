@@ -393,3 +393,64 @@ def test_robot_reach_bounds_the_positions():
     reach = robot_reach_mm(load_robot("IRB1600-10/1.45"))
     # the flange at full stretch (θ2 = 90°, arm horizontal) is within the bound
     assert 1450.0 < reach < 2500.0
+
+
+# ---- 9: a large program shows the step its rewrite is at, on a terminal only -----------
+
+
+class _Terminal:
+    """A standard error that says it is a terminal, keeping what is written."""
+
+    def __init__(self) -> None:
+        import io
+
+        self.buffer = io.StringIO()
+
+    def isatty(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        return self.buffer.write(text)
+
+    def flush(self) -> None:
+        pass
+
+
+def test_a_large_rewrite_shows_its_steps_on_a_terminal_and_writes_the_same(
+        small_model, tmp_path, capsys, monkeypatch):
+    import sys
+
+    from rapidfix.commands import rewrite as rewrite_command
+    from rapidfix.postprocess.rewrite import STEPS
+
+    source = SAMPLES / "cell.mod"
+    plain = tmp_path / "plain.mod"
+    assert main(["rewrite", str(source), "--model", str(small_model), "-o", str(plain)]) == 3
+    quiet = capsys.readouterr()
+    assert "rapidfix rewrite:" not in quiet.err  # not a terminal: no bar in the log
+    terminal = _Terminal()
+    monkeypatch.setattr(rewrite_command, "STEP_BAR_FROM_BYTES", 1)  # any file is large
+    monkeypatch.setattr(sys, "stderr", terminal)
+    shown = tmp_path / "shown.mod"
+    status = main(["rewrite", str(source), "--model", str(small_model), "-o", str(shown)])
+    monkeypatch.undo()
+    assert status == 3
+    bar = terminal.buffer.getvalue()
+    assert [step for step in STEPS if f"rapidfix rewrite: {step}" in bar] == list(STEPS)
+    assert shown.read_bytes() == plain.read_bytes()
+    assert capsys.readouterr().out == quiet.out.replace(str(plain), str(shown))
+
+
+def test_rewrite_reports_its_steps_in_order(small_model, tmp_path):
+    from rapidfix.postprocess import Compensator, RewriteOptions, rewrite_file
+    from rapidfix.postprocess.rewrite import STEPS
+
+    comp = Compensator.load(str(small_model))
+    steps: list[str] = []
+    result = rewrite_file(SAMPLES / "ballbar.mod", tmp_path / "out.mod", comp,
+                          RewriteOptions(), progress=steps.append)
+    assert steps == list(STEPS) and result.written
+    steps.clear()  # strict, with a move it cannot compensate: nothing is written
+    result = rewrite_file(SAMPLES / "cell.mod", tmp_path / "cell.mod", comp,
+                          RewriteOptions(strict=True), progress=steps.append)
+    assert steps == list(STEPS[:5]) and not result.written
