@@ -168,7 +168,7 @@ STEP_BAR_FROM_BYTES = 1_000_000
 
 @contextmanager
 def step_bar(source: Path) -> Iterator[Callable[[str], None] | None]:
-    """A progress callback showing the rewrite's steps on standard error (`rewrite.STEPS`),
+    """A progress callback showing the rewrite's steps on standard error (REWRITE_STEPS),
     or None: not a terminal (no bars in logs), or a program too small to wait for."""
     try:
         large = source.stat().st_size >= STEP_BAR_FROM_BYTES
@@ -179,7 +179,7 @@ def step_bar(source: Path) -> Iterator[Callable[[str], None] | None]:
         return
     from tqdm import tqdm
 
-    from rapidfix.postprocess.rewrite import STEPS
+    from rapidfix.postprocess import REWRITE_STEPS as STEPS
 
     with tqdm(total=len(STEPS), initial=1, desc=f"rapidfix rewrite: {STEPS[0]}", leave=False,
               bar_format="{desc} (step {n_fmt} of {total_fmt}, {elapsed})") as bar:

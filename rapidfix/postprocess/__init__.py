@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 from rapidfix import lazy_exports
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.rewrite import (
+    REWRITE_STEPS,
     RewriteOptions,
     RewriteResult,
     Skipped,
@@ -64,6 +65,7 @@ LAZY_EXPORTS = {
 
 __all__ = [
     "RAPID_SUFFIXES",
+    "REWRITE_STEPS",
     "BatchSettings",
     "Compensator",
     "Execution",

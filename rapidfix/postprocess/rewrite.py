@@ -345,8 +345,8 @@ def _strip_old_header(editor: Editor, text: str) -> None:
 # ---------------------------------------------------------------------------- API
 #: the steps a rewrite reports to its `progress` callback, in order (`rewrite_file` reports
 #: the last)
-STEPS = ("reading the program", "planning", "checking the paths", "writing the edits",
-         "reading the output back", "writing the file")
+REWRITE_STEPS = ("reading the program", "planning", "checking the paths", "writing the edits",
+                 "reading the output back", "writing the file")
 
 
 def _no_progress(_step: str) -> None:
@@ -358,7 +358,7 @@ def rewrite_source(
     progress: Callable[[str], None] | None = None,
 ) -> RewriteResult:
     """Compensate one program given as bytes; returns the new bytes and what was done.
-    `progress` is called with each of the first five `STEPS` as it starts."""
+    `progress` is called with each of the first five `REWRITE_STEPS` as it starts."""
     return _rewrite_owned([data], filename, comp, options, progress)
 
 
@@ -369,7 +369,7 @@ def _rewrite_owned(handed: list[bytes], filename: str, comp: Compensator,
     keeps no other reference, a large file's bytes are let go of once decoded."""
     step = progress or _no_progress
     with cyclic_gc_paused():
-        step(STEPS[0])
+        step(REWRITE_STEPS[0])
         digest = sha256_bytes(handed[0])
         program = parse_owned(handed, filename)
         work = kernel_work(program)
@@ -419,14 +419,14 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
             file=filename,
             hint="use RewriteOptions(force=True) to compensate it again",
         )
-    step(STEPS[1])
+    step(REWRITE_STEPS[1])
     planned = plan_program(program, comp, options.emit,
                            temperature_c=options.temperature_c, approach=options.approach)
-    step(STEPS[2])
+    step(REWRITE_STEPS[2])
     refined = refine_paths(program, comp.model, comp.robot, planned,
                            options.path_tolerance_mm, options.emit)
     planned, refined = _after_path_check(planned, refined)
-    step(STEPS[3])
+    step(REWRITE_STEPS[3])
     emission = emit_edits(program, comp, planned, refined)
     skipped = [Skipped(site.where, site.label, site.reason)
                for site in planned.sites if site.reason is not None]
@@ -471,7 +471,7 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
     del program, planned, refined, emission
     output = editor.render()
     del editor
-    step(STEPS[4])
+    step(REWRITE_STEPS[4])
     read = read_back(units, filename, expected)
     deviation = predicted_deviation(comp.model, comp.robot, read, expected, filename)
     worst = float(deviation.max()) if deviation.size else None
@@ -517,7 +517,7 @@ def rewrite_file(
     """Rewrite `source` into `target` atomically; the input is only replaced with in_place
     (a backup is written first). With strict options and skipped targets nothing is written.
     `name` is how messages call the file (default: the source path); `progress` is called
-    with each of `STEPS` as it starts."""
+    with each of `REWRITE_STEPS` as it starts."""
     source, target = Path(source), Path(target)
     same = target.exists() and source.exists() and target.resolve() == source.resolve()
     if same and not in_place:
@@ -531,7 +531,7 @@ def rewrite_file(
     result = _rewrite_owned(handed, name or str(source), comp, options, progress)
     if result.skipped and options.strict:
         return result
-    (progress or _no_progress)(STEPS[5])
+    (progress or _no_progress)(REWRITE_STEPS[5])
     if data is not None:
         backup = backup_path(source)
         write_bytes_atomic(backup, data)
@@ -544,6 +544,7 @@ def rewrite_file(
 
 
 __all__ = [
+    "REWRITE_STEPS",
     "RewriteOptions",
     "RewriteResult",
     "Skipped",

@@ -421,7 +421,7 @@ def test_a_large_rewrite_shows_its_steps_on_a_terminal_and_writes_the_same(
     import sys
 
     from rapidfix.commands import rewrite as rewrite_command
-    from rapidfix.postprocess.rewrite import STEPS
+    from rapidfix.postprocess import REWRITE_STEPS as STEPS
 
     source = SAMPLES / "cell.mod"
     plain = tmp_path / "plain.mod"
@@ -442,8 +442,8 @@ def test_a_large_rewrite_shows_its_steps_on_a_terminal_and_writes_the_same(
 
 
 def test_rewrite_reports_its_steps_in_order(small_model, tmp_path):
+    from rapidfix.postprocess import REWRITE_STEPS as STEPS
     from rapidfix.postprocess import Compensator, RewriteOptions, rewrite_file
-    from rapidfix.postprocess.rewrite import STEPS
 
     comp = Compensator.load(str(small_model))
     steps: list[str] = []
