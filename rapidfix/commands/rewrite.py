@@ -162,7 +162,7 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
 
 
 #: a program at least this large (bytes, about 10,000 lines) shows the step its rewrite is
-#: at, on a terminal: a million lines take a minute
+#: at, on a terminal: a million lines take up to a minute
 STEP_BAR_FROM_BYTES = 1_000_000
 
 
