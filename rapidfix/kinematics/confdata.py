@@ -46,20 +46,12 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     flat = q.reshape(-1, 6)
     finite = np.all(np.isfinite(flat), axis=1)
     safe = np.where(finite[:, None], flat, 0.0)
-    nominal = model.nominal
-    w, r = model.axis_dirs, model.axis_points
-    c0 = wrist_centre(nominal)
+    w, r, c0, fwd0, side_sign = _arm_frame(model)
     kernel = load_kernel("rapidfix.kinematics.conf_compiled") \
         if flat.shape[0] >= _COMPILED_FROM and forward_is_compiled() else None
     if kernel is not None:  # the same quantities to rounding (~1e-13 mm), in one pass
-        w = np.ascontiguousarray(w, dtype=float)
-        r = np.ascontiguousarray(r, dtype=float)
-        fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
-        fwd0 /= np.linalg.norm(fwd0)
-        side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
         sides = np.empty((flat.shape[0], 2))
-        kernel.wrist_sides_rows(safe, w, r, np.asarray(c0, dtype=float), fwd0,
-                                float(np.sign(side0)) if side0 != 0 else 1.0, sides)
+        kernel.wrist_sides_rows(safe, w, r, c0, fwd0, side_sign, sides)
         out = np.stack([safe[:, 0], safe[:, 3], safe[:, 5], sides[:, 0], sides[:, 1],
                         safe[:, 4]], axis=1)
         out[~finite] = np.nan
@@ -69,8 +61,6 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     R, t = arm3[:, :3, :3], arm3[:, :3, 3]  # e^{S1θ1} e^{S2θ2} e^{S3θ3}
     c = np.einsum("nij,j->ni", R, c0) + t
     # Ahead of axis 1: along the arm plane's forward direction, turned by θ1.
-    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
-    fwd0 /= np.linalg.norm(fwd0)
     R1 = prefix[:, 1, :3, :3]
     ahead1 = np.einsum("ni,ni->n", c - r[0], np.einsum("nij,j->ni", R1, fwd0))
     # Ahead of the lower arm: side of the line axis 2 → axis 3 (in the arm plane).
@@ -80,12 +70,24 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     arm = a3 - a2
     arm_len = np.linalg.norm(arm, axis=1)
     side = np.einsum("ni,ni->n", np.cross(arm, c - a2), w2) / arm_len
-    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
-    side *= np.sign(side0) if side0 != 0 else 1.0
+    side *= side_sign
     out = np.stack([safe[:, 0], safe[:, 3], safe[:, 5], ahead1, side, safe[:, 4]], axis=1)
     out[~finite] = np.nan
     return out.reshape((*q.shape[:-1], 6))
 
+
+def _arm_frame(model: RobotModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                            float]:
+    """What the wrist centre's distances are measured with: the axis directions and
+    points (n, 3), the wrist centre at home, the arm plane's forward direction at home
+    and the sign that makes the lower-arm side positive at home."""
+    w = np.ascontiguousarray(model.axis_dirs, dtype=float)
+    r = np.ascontiguousarray(model.axis_points, dtype=float)
+    c0 = np.asarray(wrist_centre(model.nominal), dtype=float)
+    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
+    fwd0 /= np.linalg.norm(fwd0)
+    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+    return w, r, c0, fwd0, float(np.sign(side0)) if side0 != 0 else 1.0
 
 def confdata(model: RobotModel, q: np.ndarray) -> np.ndarray:
     """ABB confdata (N, 4) int [cf1, cf4, cf6, cfx] of joints q (N, 6) rad ((6,) gives (4,))."""
@@ -219,12 +221,7 @@ def _select_compiled(kernel: ModuleType, model: RobotModel, sols: IKSolutions,
     """`select_by_conf` by the compiled kernel (`conf_compiled`), where the IK's closed
     form was compiled too: the same choice, one pass over the poses."""
     n = len(sols)
-    w = np.ascontiguousarray(model.axis_dirs, dtype=float)
-    r = np.ascontiguousarray(model.axis_points, dtype=float)
-    c0 = wrist_centre(model.nominal)
-    fwd0 = (c0 - r[0]) - ((c0 - r[0]) @ w[0]) * w[0]
-    fwd0 /= np.linalg.norm(fwd0)
-    side0 = np.cross(r[2] - r[1], c0 - r[1]) @ w[1]
+    w, r, c0, fwd0, side_sign = _arm_frame(model)
     q = np.empty((n, 6))
     found = np.empty(n, dtype=bool)
     chosen = np.empty(n, dtype=np.int64)
@@ -233,8 +230,8 @@ def _select_compiled(kernel: ModuleType, model: RobotModel, sols: IKSolutions,
     kernel.select_on_conf(
         np.ascontiguousarray(sols.base_q, dtype=float), np.ascontiguousarray(sols.reachable),
         np.ascontiguousarray(sols.turn_ok), np.asarray(sols.counts, dtype=np.int64),
-        np.ascontiguousarray(conf, dtype=np.int64), w, r, np.asarray(c0, dtype=float), fwd0,
-        float(np.sign(side0)) if side0 != 0 else 1.0, CONF_TOL, CONF_TOL_MM, EXACT_TOL,
+        np.ascontiguousarray(conf, dtype=np.int64), w, r, c0, fwd0, side_sign, CONF_TOL,
+        CONF_TOL_MM, EXACT_TOL,
         q, found, chosen, any_valid, redo)
     status = np.where(found, IKStatus.OK, IKStatus.NO_MATCHING_CONF).astype(np.int8)
     status[found & sols.base_singular[np.arange(n), chosen]] = IKStatus.WRIST_SINGULAR

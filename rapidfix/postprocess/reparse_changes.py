@@ -174,9 +174,7 @@ class CheckUnits:
         if without:
             decls = {scope: [text for text, kind in zip(texts, self._kinds[scope])
                              if kind not in without] for scope, texts in self._decls.items()}
-        none = [None] * self._count if joint != robtarget else []
-        slots = self._slots if joint else none
-        target_slots = self._target_slots if robtarget else none
+        slots, target_slots = self._slots, self._target_slots
         for n, (module, routines) in enumerate(modules.items()):
             out.append(f"MODULE {module}")
             if n == 0:
@@ -187,8 +185,8 @@ class CheckUnits:
                 out.extend(decls.get((module, routine), []))
                 for first, texts in self._statements.get((module, routine), []):
                     for ident, statement in enumerate(texts, first):
-                        if without and (slots[ident] is not None
-                                        or target_slots[ident] is not None):
+                        if ((joint and slots[ident] is not None)
+                                or (robtarget and target_slots[ident] is not None)):
                             continue
                         out.append(statement)
                         order.append(ident)

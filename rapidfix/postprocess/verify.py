@@ -17,7 +17,6 @@ from collections import deque
 from dataclasses import dataclass
 from itertools import repeat
 from operator import is_not, itemgetter
-from typing import Any
 
 import numpy as np
 
@@ -173,10 +172,9 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
         tables[key] = table
         pos += len(texts)
     # the names of the other new declarations (the robtargets' too): a clash where a new
-    # jointtarget of their module has it; in the way of a robtarget's name in their scope
-    # where they are not robtargets' (nor are the new jointtargets)
-    in_the_way: dict[tuple[str, str | None], dict[str, Any]] = {
-        scope: dict(table) for scope, table in tables.items()}
+    # jointtarget of their module has it; those not robtargets' (`others`, and the new
+    # jointtargets) are in the way of a robtarget's name in their scope
+    others: dict[tuple[str, str | None], set[str]] = {}
     for robtargets, by_scope in ((False, units.other_declarations()),
                                  (True, units.robtarget_declarations() if tables else {})):
         for scope, texts in by_scope.items():
@@ -189,7 +187,7 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
                     if joint_module == scope[0] and name in table:
                         _clash(name, (joint_module, joint_routine), filename)
                 if not robtargets:
-                    in_the_way.setdefault(scope, {})[name] = None
+                    others.setdefault(scope, set()).add(name)
     # the statements' names, found in their scopes
     where = np.full(len(slots), -1, dtype=np.int64)
     for (module, routine), idents in units.statement_scopes():
@@ -214,7 +212,7 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
     if target_rows.any():
         at = np.flatnonzero(target_rows)
         targets = _robtarget_targets(units, expected.motion[at], expected.slot[at],
-                                     in_the_way)
+                                     (tables, others))
     if targets is None:  # the kept instructions and their robtargets with everything else
         if not is_joint.any():
             return None
@@ -271,13 +269,15 @@ def _robtarget_tables(units: CheckUnits
 
 
 def _robtarget_targets(units: CheckUnits, motion: np.ndarray, slot: np.ndarray,
-                       in_the_way: dict[tuple[str, str | None], dict[str, Any]]
+                       in_the_way: tuple[dict[tuple[str, str | None], dict[str, int]],
+                                         dict[tuple[str, str | None], set[str]]]
                        ) -> _Robtargets | None:
     """The robtargets of checked rows (target `slot[i]` of statement `motion[i]`, each with
     a TargetSlot): a name as RAPID finds it (the routine's data, then the module's) among
     the robtarget declarations of the check units, a literal as written; None where a
     declaration or a literal is not read (`read_robtarget_declarations`), a name is not
-    among them or is declared otherwise in its scope (`in_the_way`), or a statement's
+    among them or is declared otherwise in its scope (`in_the_way`: the new jointtargets
+    and the other new declarations, by scope), or a statement's
     text around its targets does not read them."""
     robtargets = _robtarget_tables(units)
     if robtargets is None:
@@ -306,8 +306,8 @@ def _robtarget_targets(units: CheckUnits, motion: np.ndarray, slot: np.ndarray,
         if not written.isascii() or len(lowered) != len(named):
             return None
         for scope in ((module, routine), (module, None)):  # names declared otherwise there
-            blocked = in_the_way.get(scope)
-            if blocked and not blocked.keys().isdisjoint(lowered):
+            joint, other = in_the_way[0].get(scope, {}), in_the_way[1].get(scope, set())
+            if not (joint.keys().isdisjoint(lowered) and other.isdisjoint(lowered)):
                 return None
         local = tables.get((module, routine), {})
         rows = list(map(tables.get((module, None), {}).get, lowered))
