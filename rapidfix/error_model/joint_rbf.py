@@ -46,6 +46,12 @@ _EDGE_TOL = 1e-12
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
+#: batches from this size on read the sums from a table (`rbf_compiled.sum_tables`: about
+#: a millisecond to make per network, a few ns an angle after): a large program's
+#: chunks (`chunks.COMPENSATE`, `chunks.PREDICT`), not a small program's few targets
+_TABLE_FROM = 2048
+#: a network wider than this many nodes keeps its sums (no valid model comes near)
+_TABLE_MAX_NODES = 1 << 17
 _COMPILED = Switch("rapidfix_rbf_compiled")
 
 
@@ -118,7 +124,7 @@ class RBFNetwork:
 
     def _compiled_sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray | None:
         """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)) by the compiled kernel,
-        or None without it."""
+        or None without it; a large batch from the network's table (`_table`)."""
         if x.shape[0] < _COMPILED_FROM or not _COMPILED.get():
             return None
         kernel = _kernel()
@@ -130,8 +136,18 @@ class RBFNetwork:
             known = self.__dict__["_spacing"] = (self.centres, c, kernel.evenly_spaced(c))
         _, c, even = known
         k = c.shape[0]
-        step = (c[-1] - c[0]) / max(k - 1, 1) / self.width
         weights = np.ascontiguousarray(self.weights[:k], dtype=float)
+        if x.shape[0] >= _TABLE_FROM:
+            table = self._table(kernel, c, weights)
+            if table is not None:
+                lo, inv_h, value, slopes = table
+                out = np.empty((2, x.shape[0]) if slope is None else x.shape[0])
+                first, second = (out[0], out[1]) if slope is None else (out, out)
+                kernel.table_sums(np.ascontiguousarray(x), lo, inv_h, value, slopes, c,
+                                  1.0 / self.width, weights,
+                                  2 if slope is None else int(slope), first, second)
+                return out
+        step = (c[-1] - c[0]) / max(k - 1, 1) / self.width
         if slope is None:
             both = np.empty((2, x.shape[0]))
             kernel.gaussian_sums_both(np.ascontiguousarray(x), c, 1.0 / self.width, weights,
@@ -141,6 +157,21 @@ class RBFNetwork:
         kernel.gaussian_sums(np.ascontiguousarray(x), c, 1.0 / self.width, weights, step,
                              even, slope, out)
         return out
+
+    def _table(self, kernel: ModuleType, centres: np.ndarray, weights: np.ndarray
+               ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
+        """The network's `rbf_compiled.sum_tables`, made on first use and again whenever
+        its centres, width, range or weights have changed; None for a range too wide."""
+        known = self.__dict__.get("_tables")
+        key = (self.width, self.lo, self.hi)
+        if (known is not None and known[0] is self.centres and known[1] == key
+                and np.array_equal(known[2], weights)):
+            return known[3]
+        nodes = (self.hi - self.lo) / self.width * kernel.TABLE_NODES_PER_WIDTH
+        table = (kernel.sum_tables(centres, self.width, weights, self.lo, self.hi)
+                 if 0.0 < nodes < _TABLE_MAX_NODES else None)
+        self.__dict__["_tables"] = (self.centres, key, weights.copy(), table)
+        return table
 
     def value(self, x: np.ndarray) -> np.ndarray:
         """Δθ at angles already inside the valid range (`design(x) @ weights`, computed

@@ -119,12 +119,14 @@ def test_too_few_points_is_a_clear_error_and_short_sweeps_still_fit():
 
 @pytest.mark.parametrize("factor", [0.5, 1.0, 4.0, 13.0])
 @pytest.mark.parametrize("spacing", ["even", "uneven"])
-def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing):
+@pytest.mark.parametrize("batch", ["small", "large"])
+def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing, batch):
     """Inside `compiled_sums` (the post-processor) the Gaussian sums run compiled when
     numba is installed: products along evenly spaced centres, or one exp per term where
-    the centres are not even. Either way they are the basis matrix times the weights to
-    rounding, for narrow and wide Gaussians, at the ends of the range and between."""
-    from rapidfix.error_model.joint_rbf import RBFNetwork, compiled_sums
+    the centres are not even, and a large batch from the network's table of quintics.
+    Each way they are the basis matrix times the weights to rounding, for narrow and
+    wide Gaussians, at the ends of the range, at the centres and between."""
+    from rapidfix.error_model.joint_rbf import _TABLE_FROM, RBFNetwork, compiled_sums
 
     rng = np.random.default_rng(7)
     centres = np.linspace(-2.5, 2.8, 120)
@@ -132,13 +134,16 @@ def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing):
         centres = centres + rng.uniform(-1e-3, 1e-3, centres.size) * (centres[1] - centres[0])
     net = RBFNetwork(centres, factor * (centres[1] - centres[0]), -2.5, 2.8, 1e-4)
     net.weights = rng.normal(size=net.n_params) * 1e-3
-    x = np.concatenate([[-2.5, 2.8], centres[:5], rng.uniform(-2.5, 2.8, 3000)])
+    size = _TABLE_FROM - 200 if batch == "small" else 3 * _TABLE_FROM
+    x = np.concatenate([[-2.5, 2.8], centres[:5], rng.uniform(-2.5, 2.8, size)])
     with compiled_sums():
         value, slope = net.value(x), net.derivative(x)
+        both = net.value_and_derivative(x)
     scale = np.abs(net.weights).sum()
     np.testing.assert_allclose(value, net.design(x) @ net.weights, rtol=0, atol=1e-13 * scale)
     np.testing.assert_allclose(slope, net.design_derivative(x) @ net.weights, rtol=0,
                                atol=1e-13 * scale / net.width)
+    assert np.array_equal(both[0], value) and np.array_equal(both[1], slope)
     # outside the block: numpy's sums, exactly as before
     assert np.array_equal(net.value(x), _numpy_value(net, x))
 
@@ -185,3 +190,45 @@ def test_value_and_derivative_at_once_are_each_on_its_own(compiled, spacing):
     assert outside[:, 0].any() and np.all(both[1][outside[:, 0], 0] == 0.0)
     assert np.all(both[0][:, 3] == 0.0) and np.all(both[1][:, 3] == 0.0)
     assert np.any(both[1][~outside[:, 0], 0] != 0.0)
+
+
+def test_the_table_of_a_network_follows_its_weights_and_its_range():
+    """A large batch reads the sums from a table made for the network as it is: new
+    weights (a model fitted again, or set by a diagnosis) or a new range make a new
+    table, and angles off the table (outside the range, NaN) take their terms one by
+    one: the numbers of the basis times the weights each time."""
+    pytest.importorskip("numba")
+    from rapidfix.error_model.joint_rbf import _TABLE_FROM, RBFNetwork, compiled_sums
+
+    rng = np.random.default_rng(3)
+    centres = np.linspace(-1.5, 1.2, 40)
+    net = RBFNetwork(centres, 2.0 * (centres[1] - centres[0]), -1.5, 1.2, 1e-4)
+    x = np.concatenate([rng.uniform(-1.5, 1.2, _TABLE_FROM), [-1.9, 1.6]])
+    for _ in range(2):
+        net.weights = rng.normal(size=net.n_params) * 1e-3
+        with compiled_sums():
+            value = net.value(x)
+        scale = np.abs(net.weights).sum()
+        np.testing.assert_allclose(value, net.design(x) @ net.weights, rtol=0,
+                                   atol=1e-13 * scale)
+    net.lo, net.hi = -1.0, 1.0  # a narrower table: the ends of x are off it
+    with compiled_sums():
+        value = net.value(np.concatenate([x, [np.nan]]))
+    np.testing.assert_allclose(value[:-1], net.design(x) @ net.weights, rtol=0,
+                               atol=1e-13 * scale)
+    assert np.isnan(value[-1])
+
+
+def test_quintic_pieces_are_exact_on_a_quintic():
+    """The table's pieces match the value and its first two derivatives at both nodes
+    of each interval: a polynomial of degree five is given back to rounding anywhere."""
+    kernel = pytest.importorskip("rapidfix.error_model.rbf_compiled")
+    coef = np.array([0.3, -1.2, 0.7, 2.0, -0.9, 0.25])  # c0 + c1 x + ... + c5 x^5
+    f = np.polynomial.Polynomial(coef)
+    nodes = np.linspace(-1.0, 2.0, 7)
+    h = nodes[1] - nodes[0]
+    pieces = kernel.quintic_pieces(f(nodes), f.deriv(1)(nodes), f.deriv(2)(nodes), h)
+    t = np.linspace(0.0, 1.0, 11)
+    for j in range(nodes.size - 1):
+        got = np.polynomial.polynomial.polyval(t, pieces[j])
+        np.testing.assert_allclose(got, f(nodes[j] + t * h), rtol=0, atol=1e-12)
