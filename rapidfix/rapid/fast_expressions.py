@@ -132,6 +132,11 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
+    # next tried: a function call of a name and numbers, written without spaces, as most
+    # targets moved by Offs or RelTool are (`Offs(p7,0,0,-10)`): what `term` takes, in
+    # one pass
+    named_call = (rf"(?={NAME_START}){value_name}\((?={NAME_START}){value_name}"
+                  rf"(?:,(?:-{WS}*)?{number})+\)(?={WS}*[,;\\])")
 
     def argument(value: str) -> str:
         """`\\Name:=` or nothing before a value, or a switch `\\Name`."""
@@ -158,7 +163,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
     value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
-             f"|{quick}|{string}|(?!{quick}|{string})(?:{term}{follow})+)")
+             f"|{quick}|{named_call}|{string}|(?!{quick}|{named_call}|{string})"
+             f"(?:{term}{follow})+)")
     # a separator is refused before the list's end however much space stands between
     # (`Foo 1, ;` is not RAPID)
     arguments = rf"(?:{argument(value)}(?:{WS}*,(?!{WS}*;){WS}*|{WS}*(?=[\\;])))+"

@@ -428,3 +428,42 @@ def test_texts_that_differ_in_their_digits_share_a_shape_not_their_nodes():
     fastpath._read_by_shape("f(1\\A1:=2)", 0)
     again = fastpath._read_by_shape("f(2\\A2:=3)", 0)
     assert again.args[1].name == "A2" and fastpath._SHAPES[b"f(1\\A1:=1)"] is None
+
+
+# Targets moved by a function of a name and numbers (the lexer's `named_call`, tried
+# before the general terms), and texts next to that form that it must leave to them.
+NAMED_CALLS = [
+    "MoveL Offs(p1,0,0,-10), v100, z1, tool0;",
+    "MoveL RelTool(p1,1.5,-2,0.25e1),v100,z1,tool0\\WObj:=wobj1;",
+    "MoveL Offs(p1,0,0,- 10),v100,fine,tool0;",
+    "MoveL Offs(p1,0x1F,0b1,0o7)\\Conc,v100,z1,tool0;",
+    "MoveC Offs(p1,0,.5,0),Offs(p2,0,1.,0),v100,z1,tool0;",
+    "Foo Offs(p1,0,0,1);",
+    "MoveL Offs(p1,0,0,1)*2,v100,z1,tool0;",
+    "MoveL Offs(p1,0,0,1)+Offs(p2,0,0,1),v100,z1,tool0;",
+    "MoveL Offs(p1.trans,0,0,1),v100,z1,tool0;",
+    "MoveL Offs(p1,0,0,nLift),v100,z1,tool0;",
+    "MoveL Offs (p1,0,0,1),v100,z1,tool0;",
+    "MoveL Offs( p1,0,0,1),v100,z1,tool0;",
+    "MoveL Offs(p1{2},0,0,1),v100,z1,tool0;",
+    "MoveL Offs(p1,0,0,+1),v100,z1,tool0;",
+    "MoveL RelTool(p1,0,0,0\\Rz:=45),v100,z1,tool0;",
+    "Foo Offs(TRUE,0,0,0), f(g,1);",
+    "pCur := Offs(p1,0,0,10);",
+]
+
+
+@pytest.mark.parametrize("statement", NAMED_CALLS)
+def test_a_call_of_a_name_and_numbers_is_read_in_runs_to_the_plain_tree(statement):
+    text = routine("Stop;", statement, "Stop;")
+    tree = fast_parser().parse(text)
+    body = tree.modules[0].items[0].body
+    assert all(isinstance(item, (s.LazyCall, s.Assignment)) for item in body)
+    assert shape(tree) == plain_tree(text)
+
+
+@pytest.mark.parametrize("value", ["Offs(p1,0,0,-10)", "RelTool(p1,1,2,3) ", "Offs(p1,0,0,1)*2",
+                                   "Offs(p1,0,0,n)"])
+def test_a_declaration_of_a_call_of_a_name_and_numbers_parses_to_the_plain_tree(value):
+    text = f"MODULE m\n  CONST robtarget p1 := {value};\n  VAR num n := {value};\nENDMODULE\n"
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
