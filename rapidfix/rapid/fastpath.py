@@ -184,8 +184,12 @@ def _patterns() -> dict[str, str]:
     value = expression["value"]
     # a procedure call, or an assignment: its value is taken by the arguments' pattern
     # (written once), and split_calls refuses (NotFast) what is more than one value
-    call = (f"{call_name}(?:{expression['selectors']}{WS}*:={WS}*)?"
-            f"(?:{WS}*{expression['arguments']})?{WS}*;")
+    general_call = (f"{call_name}(?:{expression['selectors']}{WS}*:={WS}*)?"
+                    f"(?:{WS}*{expression['arguments']})?{WS}*;")
+    # first tried: a call whose arguments are all plain, as most are (a subset of the
+    # general pattern's statements, so the same tokens)
+    plain_call = f"{call_name}{WS}+{expression['plain_arguments']}{WS}*;"
+    call = f"(?:{plain_call}|{general_call})"
     # array dimensions: numbers or names of constants (`{50}`, `{2,3}`, `{nChannels,10}`)
     dim = f"(?:{number}|{value_name})"
     dims = rf"\{{{WS}*{dim}(?:{WS}*,{WS}*{dim})*{WS}*\}}"
@@ -197,7 +201,8 @@ def _patterns() -> dict[str, str]:
     # (an ENDIF later on the line first: an IF over lines fails at once)
     block_head = (rf"(?i:IF){_WORD_END}(?=[^\n]*(?i:ENDIF))"
                   rf"{condition_pattern(plain_name, then)}{then}")
-    return {"call": call, "decl": decl, "block_head": block_head,
+    return {"call": call, "plain_call": plain_call, "general_call": general_call,
+            "decl": decl, "block_head": block_head,
             **head_patterns(expression["condition"], False)}
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from lark import Lark
 
-from rapidfix.rapid.fastpath import FastSyntaxBuilder, cached_extension, fast_parser
+from rapidfix.rapid.fastpath import FastSyntaxBuilder, _patterns, cached_extension, fast_parser
 from rapidfix.rapid.grammar import grammar_text
 from rapidfix.rapid.lexer_patterns import LARGE_PATTERN, share_large_patterns
 from rapidfix.rapid.readback import run_parser
@@ -68,3 +71,68 @@ def test_the_large_patterns_stay_shared_when_res_cache_is_emptied(monkeypatch):
                                        lexer="contextual", transformer=FastSyntaxBuilder(),
                                        cache=True))
     test_each_large_pattern_is_one_compiled_expression_in_every_state(lambda: parser)
+
+
+# Pieces of calls as programs write them, keywords and odd spellings among them.
+_NAMES = ["p1", "v100", "tool0", "pÖver", "x_1", "Offs", "ENDPROC", "And", "not", "TRUE",
+          "false", "MOD", "If", "Stop", "WObj"]
+_NUMBERS = ["0", "1.5", "-2", "- 3", ".5", "1e3", "0x1F", "1.", "9E+09", "+1", "1-1"]
+_AGGREGATES = ["[[1,2,3],[1,0,0,0]]", "[1, 2]", "[[1,2],3]", "[ ]", "[[-1.5e3,.5],[9E+09]]",
+               "[[1,2]", "[1,[2,[3]]]"]
+_SPACE = st.sampled_from(["", " ", "  ", "\t", "\n  "])
+
+
+@st.composite
+def _plain_value(draw) -> str:
+    kind = draw(st.sampled_from(["name", "number", "call", "aggregate"]))
+    if kind == "name":
+        return draw(st.sampled_from(_NAMES))
+    if kind == "number":
+        return draw(st.sampled_from(_NUMBERS))
+    if kind == "aggregate":
+        return draw(st.sampled_from(_AGGREGATES))
+    numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
+    spaced = draw(st.sampled_from(["", " "]))
+    return (f"{draw(st.sampled_from(_NAMES))}({draw(st.sampled_from(_NAMES))},"
+            f"{(',' + spaced).join(numbers)})")
+
+
+@st.composite
+def _statement(draw) -> str:
+    text = draw(st.sampled_from(_NAMES)) + draw(st.sampled_from([" ", "\t", "", " \n "]))
+    text += draw(_plain_value())
+    for _ in range(draw(st.integers(0, 5))):
+        space = draw(_SPACE)
+        if draw(st.booleans()):
+            text += f"{space},{draw(_SPACE)}{draw(_plain_value())}"
+            continue
+        comma = draw(st.sampled_from(["", ","]))
+        option = f"\\{draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
+        if draw(st.booleans()):
+            option += f"{draw(_SPACE)}:={draw(_SPACE)}{draw(_plain_value())}"
+        text += f"{space}{comma}{draw(_SPACE)}{option}"
+    return text + draw(st.sampled_from(["", " ", ",", " ;"])) + ";"
+
+
+@settings(max_examples=400, deadline=None)
+@given(_statement())
+def test_the_plain_call_pattern_takes_no_statement_the_general_one_refuses(statement):
+    """The lexer tries the pattern of plain argument lists before the general one: each
+    statement the first takes, the second takes too (so they give the same tokens), and
+    the first takes the calls most programs write."""
+    patterns = _patterns()
+    if re.fullmatch(patterns["plain_call"], statement):
+        assert re.fullmatch(patterns["general_call"], statement), statement
+
+
+def test_the_plain_call_pattern_takes_the_usual_moves():
+    plain = _patterns()["plain_call"]
+    for statement in ["MoveL p5, v200, z0, tMill\\WObj:=wPlate;",
+                      "MoveJ Offs(p7,0,0,-10),v100,z1,tool0;",
+                      "MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
+                      "v100,fine,tool0\\WObj:=wobj1;",
+                      "MoveC p1, p2, v100 \\V:=120, z1, tool0;",
+                      "SetDO doGrip, 1;", "Foo a \\Switch, b \\Opt:=- 2;"]:
+        assert re.fullmatch(plain, statement), statement
+    assert not re.fullmatch(plain, "MoveL p1, v100, z1, tool0, ;")
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n), v100, z1, tool0;")
