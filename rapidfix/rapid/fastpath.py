@@ -277,8 +277,10 @@ def grammar_extension(grammar: str) -> str:
     # an IF block of calls on the line of its THEN is one statement of a run (split_calls
     # builds its If node); an IF over lines fails here at its THEN's line end, before
     # its body (which may hold an ELSE) is read twice
-    if_block = (f"{p['block_head']}(?:[ \t]*{p['call']}){{0,{RUN_LIMIT}}}[ \t]*(?i:ENDIF)"
-                f"{_WORD_END}")
+    # (the calls in it by the general pattern alone: a block is rare, and each copy of
+    # the plain one lengthens what every process compiles)
+    if_block = (f"{p['block_head']}(?:[ \t]*{p['general_call']}){{0,{RUN_LIMIT}}}"
+                f"[ \t]*(?i:ENDIF){_WORD_END}")
     calls = f"(?={NAME_START})(?:{GAP}(?:{p['call']}|{if_block})){{1,{RUN_LIMIT}}}"
     decls = f"(?={NAME_START})(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
     heads = {kind: p[kind] for kind in _HEAD_RULES}
