@@ -356,6 +356,15 @@ def declaration_pattern(modifiers: bool) -> LazyPattern:
 
 
 _DECL = declaration_pattern(True)
+# The declaration most programs are made of, `CONST robtarget p1:=[[x,y,z],[...],...];`
+# written without whitespace in its value, with the value's first group and what follows
+# it in groups of their own (LOCAL, TASK, storage, type, name, value, the first group's
+# numbers, the rest): the text `_DECL` and `grouped_value` would take apart.
+_PLAIN_DECL = LazyPattern(
+    rf"{GAP}(?:(?i:(LOCAL)){WS}+)?(?:(?i:(TASK)){WS}+)?((?i:VAR|PERS|CONST)){WS}+"
+    rf"({NAME}){WS}+({NAME}){WS}*:={WS}*"
+    r"(\[\[([-+0-9.eE,]*)\](,\[[-+0-9.eE,]*\](?:,\[[-+0-9.eE,]*\])*\]))"
+    rf"{WS}*;")
 
 class Memo(dict):
     """The one cache policy of the fast path: pure results kept across tokens and files,
@@ -1120,7 +1129,38 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     append = decls.append
     rests, storages = _RESTS, _STORAGES
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
-    for m in _DECL.compiled.finditer(text):
+    plain, general = _PLAIN_DECL.compiled.match, _DECL.compiled.search
+    pos, size = 0, len(text)
+    while pos < size:
+        m = plain(text, pos)
+        if m is not None:
+            local, task, storage, type_name, name, value, group, rest = m.groups()
+            spans = m.regs
+            items = rests.get(rest)
+            try:
+                if items is None:  # the same after any group (as grouped_value reads it)
+                    items = aggregate_value("[[0]" + rest)[1:]
+                    rests.keep(rest, items)
+                position = tuple(map(float, group.split(",")))
+            except (NotFast, ValueError):  # arithmetic the loose pattern let by
+                pass
+            else:
+                pos = m.end()
+                at = base + spans[6][0]
+                upper = storages.get(storage)
+                if upper is None:
+                    upper = storages[storage] = storage.upper()
+                first = 1 if local is not None else 2 if task is not None else 3
+                append(data_decl(
+                    base + spans[first][0], base + spans[0][1], upper, intern(type_name),
+                    intern(name), base + spans[5][0], (),
+                    numeric_aggregate(at, at + len(value), (position, *items)),
+                    local is not None, task is not None))
+                continue
+        m = general(text, pos)  # (the next declaration, as finditer would find it)
+        if m is None:
+            break
+        pos = m.end()
         local, task, storage, type_name, name, dims, value = m.groups()
         spans = m.regs
         if value is None:

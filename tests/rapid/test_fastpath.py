@@ -635,3 +635,32 @@ def test_the_bulk_reader_takes_comments_inside_statements_as_the_model_does():
         assert np.array_equal(getattr(bulk, name), getattr(full, name)), name
     assert bulk.joint.tolist() == [True, True, False]
     assert bulk.robax[1].tolist() == [1, 2, 3, 4, 5, 7]
+
+
+# Declarations of the common form (`_PLAIN_DECL`, read without `_DECL` and
+# `grouped_value`) and the texts next to it that go the general way.
+PLAIN_DECLARATIONS = [
+    "CONST robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "LOCAL PERS robtarget p1 := [[-1.5e3,.5,+3.],[1,0,0,0],[0,-1,0,1],"
+    "[9E+09,9E9,9E9,9E9,9E9,9E9]] ;",
+    "task var robtarget p1:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST num a:=[[1,2,3],[4]];",
+    "CONST robtarget p1:=[[1-1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[1,2,3],[1,0,0,0-1],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[1,2,3],[1e,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[1,2,3], [1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[1, 2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST num a{2}:=[[1,2],[3,4]];",
+    "CONST num a:=[[1,2,3]];",
+    "CONST num a:=[[[1,2],[3]],[[4],[5]]];",
+]
+
+
+@pytest.mark.parametrize("declaration", PLAIN_DECLARATIONS)
+def test_declarations_of_the_common_form_parse_to_the_plain_tree(declaration):
+    """Each alone, and in a run with the others around it (the plain form read first,
+    the general one where it does not fit)."""
+    assert_parses_as_plain(module(declaration))
+    assert_parses_as_plain(module(PLAIN_DECLARATIONS[0].replace("p1", "p0"), declaration,
+                                  "! a note", PLAIN_DECLARATIONS[2].replace("p1", "p2")))
