@@ -65,6 +65,25 @@ class Placement:
                           @ self.tool[fixed])
         return out
 
+    def tcp_positions(self, flange: np.ndarray) -> np.ndarray:
+        """`tcp(flange)[:, :3, 3]` (N,3), the TCP's positions in the work-object frame,
+        without the whole poses (all the path check and the predicted errors read):
+        wobj_R^T (R_flange t_tool + p_flange − wobj_p), the same to rounding."""
+        rot = flange[:, :3, :3]
+        if _is_shared(self.tool):
+            point = rot @ self.tool[0, :3, 3]
+        else:
+            point = np.einsum("nij,nj->ni", rot, self.tool[:, :3, 3])
+        point += flange[:, :3, 3]
+        if _is_shared(self.wobj):
+            out = (point - self.wobj[0, :3, 3]) @ self.wobj[0, :3, :3]
+        else:
+            out = np.einsum("nji,nj->ni", self.wobj[:, :3, :3], point - self.wobj[:, :3, 3])
+        fixed = self.stationary
+        if fixed.any():  # the robot holds the work: its own formula, row by row as tcp's
+            out[fixed] = self.take(fixed).tcp(flange[fixed])[:, :3, 3]
+        return out
+
 
 def shared(frame: np.ndarray, n: int) -> np.ndarray:
     """One frame (4,4) as the read-only (n,4,4) frames of n moves, without copies."""

@@ -211,7 +211,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
 
     def predict(seg: np.ndarray, q: np.ndarray) -> np.ndarray:
         flange = model.actual_flange(robot, q, take_up(seg_ctx.take(seg), seg, q))
-        return frames.take(seg).tcp(flange)[:, :3, 3]
+        return frames.take(seg).tcp_positions(flange)
 
     def solve(seg: np.ndarray, poses: np.ndarray, seed: np.ndarray) -> tuple:
         sub: Plan = plan_nearest(model, robot, poses, seed, frames.take(seg),

@@ -307,8 +307,8 @@ def _predicted_before(comp: Compensator, targets: Targets, p: Plan
     for at in range(0, rows.size, step):
         part = rows[at:at + step]
         flange = comp.model.actual_flange(comp.robot, p.q_ideal[part], p.context.take(part))
-        tcp = t.placement.take(part).tcp(flange)
-        err[at:at + step] = np.linalg.norm(tcp[:, :3, 3] - t.pose[part, :3, 3], axis=1)
+        tcp = t.placement.take(part).tcp_positions(flange)
+        err[at:at + step] = np.linalg.norm(tcp - t.pose[part, :3, 3], axis=1)
     return float(err.mean()), float(err.max())
 
 

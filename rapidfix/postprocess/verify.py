@@ -435,5 +435,5 @@ def predicted_deviation(
         return np.zeros(0)
     q = commanded_joints(robot, read, expected, filename)
     flange = model.actual_flange(robot, q, expected.context)
-    tcp = expected.placement.tcp(flange)
-    return np.linalg.norm(tcp[:, :3, 3] - expected.position, axis=1)
+    tcp = expected.placement.tcp_positions(flange)
+    return np.linalg.norm(tcp - expected.position, axis=1)

@@ -107,3 +107,25 @@ ENDMODULE
     for row, wobj in enumerate([wa, wb, np.eye(4), wb]):
         assert np.allclose(t.placement.wobj[row], wobj, atol=1e-9)
     assert t.payload_kg.tolist() == [1.2, 1.2, 1.2, 7.5]
+
+
+def test_tcp_positions_are_the_positions_of_the_tcp_poses():
+    """The positions alone (the path check's and the predicted errors' need) are those
+    of the whole TCP poses to rounding: frames per move and shared, tools on the robot
+    and held still (the robot carrying the work)."""
+    from rapidfix.postprocess.placement import Placement, shared
+
+    rng = np.random.default_rng(5)
+    n = 9
+    frames = np.tile(np.eye(4), (3, n, 1, 1))
+    for k in range(3):
+        frames[k, :, :3, :3] = Rotation.random(n, random_state=20 + k).as_matrix()
+        frames[k, :, :3, 3] = rng.uniform(-900, 900, (n, 3))
+    tool, wobj, flange = frames
+    for stationary in (np.zeros(n, bool), np.arange(n) % 3 == 1):
+        for placement in (Placement(tool, wobj, stationary),
+                          Placement(shared(tool[0], n), shared(wobj[0], n), stationary),
+                          Placement(tool, shared(wobj[0], n), stationary)):
+            want = placement.tcp(flange)[:, :3, 3]
+            got = placement.tcp_positions(flange)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
