@@ -174,7 +174,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # `value`'s own first alternatives, each separator one that `arguments` takes, so a
     # subset of `arguments` that the lexer tries first. It has one way to take each
     # text (every alternative starts with a character of its own), and takes a plain
-    # argument list at about twice the speed of the general pattern.
+    # argument list in about two thirds of the general pattern's time.
     plain = rf"(?:{quick}|{named_call}|(?=\[){loose})"
     optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{plain})?"
     plain_arguments = rf"{plain}(?:{WS}*,{WS}*(?:{plain}|{optional})|{WS}*{optional})*"

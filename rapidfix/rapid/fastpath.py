@@ -366,6 +366,7 @@ _PLAIN_DECL = LazyPattern(
     r"(\[\[([-+0-9.eE,]*)\](,\[[-+0-9.eE,]*\](?:,\[[-+0-9.eE,]*\])*\]))"
     rf"{WS}*;")
 
+
 class Memo(dict):
     """The one cache policy of the fast path: pure results kept across tokens and files,
     keyed by their text, emptied at once when `limit` entries are reached (a CAM program
@@ -1133,9 +1134,8 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     pos, size = 0, len(text)
     while pos < size:
         m = plain(text, pos)
-        if m is not None:
+        if m is not None:  # the common form: its value read here
             local, task, storage, type_name, name, value, group, rest = m.groups()
-            spans = m.regs
             items = rests.get(rest)
             try:
                 if items is None:  # the same after any group (as grouped_value reads it)
@@ -1143,47 +1143,38 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
                     rests.keep(rest, items)
                 position = tuple(map(float, group.split(",")))
             except (NotFast, ValueError):  # arithmetic the loose pattern let by
-                pass
+                m = None
             else:
-                pos = m.end()
-                at = base + spans[6][0]
-                upper = storages.get(storage)
-                if upper is None:
-                    upper = storages[storage] = storage.upper()
-                first = 1 if local is not None else 2 if task is not None else 3
-                append(data_decl(
-                    base + spans[first][0], base + spans[0][1], upper, intern(type_name),
-                    intern(name), base + spans[5][0], (),
-                    numeric_aggregate(at, at + len(value), (position, *items)),
-                    local is not None, task is not None))
-                continue
-        m = general(text, pos)  # (the next declaration, as finditer would find it)
+                at = base + m.start(6)
+                init: Any = numeric_aggregate(at, at + len(value), (position, *items))
+                sizes: Any = ()
         if m is None:
-            break
+            m = general(text, pos)  # (the next declaration, as finditer would find it)
+            if m is None:
+                break
+            local, task, storage, type_name, name, dims, value = m.groups()
+            init = None
+            if value is not None:
+                at = base + m.start(7)
+                # two levels, or three (an array's items), of numbers only (an aggregate
+                # of sums, `[[x+1,...],...]`, is fast_expressions' to read)
+                if value.startswith("[[") and _PLAIN_AGGREGATE.fullmatch(value):
+                    try:
+                        grouped = grouped_value(value, rests)
+                    except NotFast:  # arithmetic the loose pattern let by
+                        grouped = None
+                    if grouped is not None:
+                        init = numeric_aggregate(at, at + len(value), grouped)
+                if init is None:
+                    init = _value_node(value, at)
+            if dims is None:
+                sizes = ()
+            else:
+                at = base + m.start(6)
+                sizes = [_value_node(d.group(), at + d.start())
+                         for d in _INDEX_ITEM.finditer(dims)]
         pos = m.end()
-        local, task, storage, type_name, name, dims, value = m.groups()
-        spans = m.regs
-        if value is None:
-            init = None
-        else:
-            at = base + spans[7][0]
-            init = None
-            # two levels, or three (an array's items), of numbers only (an aggregate of
-            # sums, `[[x+1,...],...]`, is fast_expressions' to read)
-            if value.startswith("[[") and _PLAIN_AGGREGATE.fullmatch(value):
-                try:
-                    grouped = grouped_value(value, rests)
-                except NotFast:  # arithmetic the loose pattern let by
-                    grouped = None
-                if grouped is not None:
-                    init = numeric_aggregate(at, at + len(value), grouped)
-            if init is None:
-                init = _value_node(value, at)
-        if dims is None:
-            sizes: Any = ()
-        else:
-            at = base + spans[6][0]
-            sizes = [_value_node(d.group(), at + d.start()) for d in _INDEX_ITEM.finditer(dims)]
+        spans = m.regs  # (both patterns number LOCAL, TASK, storage, type and name alike)
         first = 1 if local is not None else 2 if task is not None else 3
         upper = storages.get(storage)
         if upper is None:
