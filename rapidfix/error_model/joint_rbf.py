@@ -71,6 +71,21 @@ def _kernel() -> ModuleType | None:
     return None if numpy_only() else load_kernel("rapidfix.error_model.rbf_compiled")
 
 
+def quintic_pieces(value: np.ndarray, slope: np.ndarray, curvature: np.ndarray,
+                   h: float) -> np.ndarray:
+    """(n−1, 6) coefficients c of the quintic c₀ + c₁t + … + c₅t⁵ on each interval
+    (t = 0…1 over h) matching `value`, `slope` and `curvature` (per unit of x) at both
+    of its nodes: the pieces of a network's table (`rbf_compiled.sum_tables`)."""
+    p0, d0, s0 = value[:-1], h * slope[:-1], h * h * curvature[:-1]
+    p1, d1, s1 = value[1:], h * slope[1:], h * h * curvature[1:]
+    rise = p1 - p0
+    return np.ascontiguousarray(np.stack([
+        p0, d0, 0.5 * s0,
+        10.0 * rise - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1,
+        -15.0 * rise + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1,
+        6.0 * rise - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1], axis=1))
+
+
 class OutsideRangeWarning(UserWarning):
     """A joint angle outside the range the model was fitted on was clamped."""
 

@@ -36,6 +36,8 @@ import math
 import numpy as np
 from numba import njit
 
+from rapidfix.error_model.joint_rbf import quintic_pieces
+
 #: centres per run of products between two exact exp() (bounds the rounding they add)
 RESTART = 16
 #: table nodes per Gaussian width (h = σ / this; see the module's docstring)
@@ -167,21 +169,6 @@ def node_sums(nodes: np.ndarray, centres: np.ndarray, inv_width: float, weights:
         out[3, m] = s3
 
 
-def quintic_pieces(value: np.ndarray, slope: np.ndarray, curvature: np.ndarray,
-                   h: float) -> np.ndarray:
-    """(n−1, 6) coefficients c of the quintic c₀ + c₁t + … + c₅t⁵ on each interval
-    (t = 0…1 over h) matching `value`, `slope` and `curvature` (per unit of x) at both
-    of its nodes."""
-    p0, d0, s0 = value[:-1], h * slope[:-1], h * h * curvature[:-1]
-    p1, d1, s1 = value[1:], h * slope[1:], h * h * curvature[1:]
-    rise = p1 - p0
-    return np.ascontiguousarray(np.stack([
-        p0, d0, 0.5 * s0,
-        10.0 * rise - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1,
-        -15.0 * rise + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1,
-        6.0 * rise - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1], axis=1))
-
-
 def sum_tables(centres: np.ndarray, width: float, weights: np.ndarray, lo: float,
                hi: float) -> tuple[float, float, np.ndarray, np.ndarray]:
     """(lo, 1/h, the sum's pieces, the slope sum's pieces) over [lo, hi] for
@@ -242,4 +229,4 @@ def table_sums(x: np.ndarray, lo: float, inv_h: float, value: np.ndarray,
 
 
 __all__ = ["RESTART", "TABLE_NODES_PER_WIDTH", "evenly_spaced", "gaussian_sums",
-           "gaussian_sums_both", "node_sums", "quintic_pieces", "sum_tables", "table_sums"]
+           "gaussian_sums_both", "node_sums", "sum_tables", "table_sums"]
