@@ -339,18 +339,25 @@ CALL_PIECE = LazyPattern(
 )
 
 
+def _declaration_head(modifiers: bool) -> str:
+    """A checked declaration up to its dimensions or value: (LOCAL, TASK, storage,) type
+    and name, the groups in parentheses only with `modifiers`."""
+    def group(pattern: str) -> str:
+        return f"({pattern})" if modifiers else pattern
+
+    return (rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
+            rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
+            rf"({NAME}){WS}+({NAME}){WS}*")
+
+
 def declaration_pattern(modifiers: bool) -> LazyPattern:
     """Splits a declaration whose syntax has been checked: (LOCAL, TASK, storage,) type,
     name, (the inside of its dimensions' braces,) and value text; the groups in
     parentheses only with `modifiers`."""
-    def group(pattern: str) -> str:
-        return f"({pattern})" if modifiers else pattern
-
+    braces = "([^{}]*)" if modifiers else "[^{}]*"
     return LazyPattern(
-        rf"{GAP}(?:(?i:{group('LOCAL')}){WS}+)?(?:(?i:{group('TASK')}){WS}+)?"
-        rf"{group('(?i:VAR|PERS|CONST)')}{WS}+"
-        rf"({NAME}){WS}+({NAME}){WS}*"
-        rf"(?:\{{{group('[^{}]*')}\}}{WS}*)?"
+        _declaration_head(modifiers)
+        + rf"(?:\{{{braces}\}}{WS}*)?"
         rf"(?::={WS}*({VALUE_TEXT}){WS}*)?;"
     )
 
@@ -361,8 +368,7 @@ _DECL = declaration_pattern(True)
 # it in groups of their own (LOCAL, TASK, storage, type, name, value, the first group's
 # numbers, the rest): the text `_DECL` and `grouped_value` would take apart.
 _PLAIN_DECL = LazyPattern(
-    rf"{GAP}(?:(?i:(LOCAL)){WS}+)?(?:(?i:(TASK)){WS}+)?((?i:VAR|PERS|CONST)){WS}+"
-    rf"({NAME}){WS}+({NAME}){WS}*:={WS}*"
+    _declaration_head(True) + rf":={WS}*"
     r"(\[\[([-+0-9.eE,]*)\](,\[[-+0-9.eE,]*\](?:,\[[-+0-9.eE,]*\])*\]))"
     rf"{WS}*;")
 

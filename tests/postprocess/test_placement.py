@@ -16,17 +16,23 @@ def _frame(trans, rot):
     return T
 
 
+def _random_frames(n: int, seed: int, start: int, reach: float) -> np.ndarray:
+    """(3, n, 4, 4) poses: rotations of random_state start, start+1, start+2 and
+    positions uniform within ±reach mm."""
+    rng = np.random.default_rng(seed)
+    frames = np.tile(np.eye(4), (3, n, 1, 1))
+    for k in range(3):
+        frames[k, :, :3, :3] = Rotation.random(n, random_state=start + k).as_matrix()
+        frames[k, :, :3, 3] = rng.uniform(-reach, reach, (n, 3))
+    return frames
+
+
 def test_placement_matches_the_kinematics_frames_for_both_tool_kinds():
     from rapidfix.kinematics.frames import Tool, WorkObject, flange_target
     from rapidfix.postprocess.placement import Placement
 
-    rng = np.random.default_rng(2)
     n = 6
-    poses = np.tile(np.eye(4), (3, n, 1, 1))
-    for k in range(3):
-        poses[k, :, :3, :3] = Rotation.random(n, random_state=k).as_matrix()
-        poses[k, :, :3, 3] = rng.uniform(-300, 300, (n, 3))
-    tool, wobj, target = poses
+    tool, wobj, target = _random_frames(n, 2, 0, 300)
     stationary = np.array([False, True] * (n // 2))
     placement = Placement(tool, wobj, stationary)
     flange = placement.flange(target)
@@ -45,12 +51,8 @@ def test_shared_frames_give_what_copied_frames_give():
     and inverts exactly as the same frames copied per move, and stays broadcast."""
     from rapidfix.postprocess.placement import Placement, shared
 
-    rng = np.random.default_rng(3)
     n = 7
-    frames = np.tile(np.eye(4), (3, n, 1, 1))
-    for k in range(3):
-        frames[k, :, :3, :3] = Rotation.random(n, random_state=10 + k).as_matrix()
-        frames[k, :, :3, 3] = rng.uniform(-300, 300, (n, 3))
+    frames = _random_frames(n, 3, 10, 300)
     tool, wobj, target = frames[0][0], frames[1][0], frames[2]
     for stationary in (np.zeros(n, bool), np.array([False, True] * 3 + [False])):
         one = Placement(shared(tool, n), shared(wobj, n), stationary)
@@ -115,13 +117,8 @@ def test_tcp_positions_are_the_positions_of_the_tcp_poses():
     and held still (the robot carrying the work)."""
     from rapidfix.postprocess.placement import Placement, shared
 
-    rng = np.random.default_rng(5)
     n = 9
-    frames = np.tile(np.eye(4), (3, n, 1, 1))
-    for k in range(3):
-        frames[k, :, :3, :3] = Rotation.random(n, random_state=20 + k).as_matrix()
-        frames[k, :, :3, 3] = rng.uniform(-900, 900, (n, 3))
-    tool, wobj, flange = frames
+    tool, wobj, flange = _random_frames(n, 5, 20, 900)
     for stationary in (np.zeros(n, bool), np.arange(n) % 3 == 1):
         for placement in (Placement(tool, wobj, stationary),
                           Placement(shared(tool[0], n), shared(wobj[0], n), stationary),
