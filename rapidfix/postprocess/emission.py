@@ -107,6 +107,26 @@ def _target_slot(text: str, syntax: Any, spans: list[Any], targets: list[str], s
     return tuple(parts) if "".join(parts) == statement else None
 
 
+def _interleave(counts: np.ndarray, before: bool
+                ) -> tuple[list[int], list[int], list[int], list[int]]:
+    """Where n items and their extras stand in one list, item j with `counts[j]`
+    extras right after it (or right `before` it): (the items' places, the extras'
+    places in order, the list as indices into the items followed by all extras, and
+    the item each place belongs to)."""
+    n = len(counts)
+    per = counts + 1
+    starts = np.cumsum(per) - per
+    items = starts + counts if before else starts
+    total = int(per.sum())
+    extras = (np.repeat((starts if before else starts + 1) - (np.cumsum(counts) - counts),
+                        counts) + np.arange(total - n))
+    order = np.empty(total, dtype=np.int64)
+    order[items] = np.arange(n)
+    order[extras] = np.arange(n, total)
+    return (items.tolist(), extras.tolist(), order.tolist(),
+            np.repeat(np.arange(n), per).tolist())
+
+
 def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tuple]:
     """The edits of a statement to a point inserted before `motion`: the optional
     arguments it drops (INTERMEDIATE_DROPS) and, with `zone`, its zone made
@@ -301,36 +321,31 @@ class _Emitter:
         # the jointtargets in the order their names are first asked for: each move's
         # destination, then the points inserted before it
         if extras:
-            want_stems: list[str] = []
-            want_literals: list[str] = []
-            want_move: list[int] = []
-            dest_at: list[int] = []
-            extra_at: dict[int, int] = {}
-            done = 0
+            # each move's destination, then the points inserted before it (`_interleave`)
+            keys = list(extras)
+            ex_stems: list[str] = []
+            ex_literals: list[str] = []
+            ex_counts: list[int] = []
             for k, (span, points, approach, _segment) in extras.items():
-                dest_at.extend(range(len(want_stems), len(want_stems) + k + 1 - done))
-                want_stems += stems[done:k + 1]
-                want_literals += literals[done:k + 1]
-                want_move += range(done, k + 1)
-                extra_at[k] = len(want_stems)
-                stem = stems[k]
+                stem, count = stems[k], len(ex_stems)
                 if span is not None:
-                    want_stems += [f"{stem}_{j + 1}" for j in range(len(points))]
-                    want_literals += points
+                    ex_stems += [f"{stem}_{j + 1}" for j in range(len(points))]
+                    ex_literals += points
                 if approach is not None:
-                    want_stems.append(f"{stem}_app")
-                    want_literals.append(approach)
-                want_move += [k] * (len(want_stems) - len(want_move))
-                done = k + 1
-            dest_at.extend(range(len(want_stems), len(want_stems) + len(sites) - done))
-            want_stems += stems[done:]
-            want_literals += literals[done:]
-            want_move += range(done, len(sites))
+                    ex_stems.append(f"{stem}_app")
+                    ex_literals.append(approach)
+                ex_counts.append(len(ex_stems) - count)
+            counts = np.zeros(len(sites), dtype=np.int64)
+            counts[keys] = ex_counts
+            dest_at, _, order, owner = _interleave(counts, before=False)
+            want_stems = list(map((stems + ex_stems).__getitem__, order))
+            want_literals = list(map((literals + ex_literals).__getitem__, order))
+            del ex_stems, ex_literals
             names = self._jointtarget_names(want_stems, want_literals,
-                                            [motions[k] for k in want_move],
-                                            [operands[k] for k in want_move])
-            dest_names = [names[n] for n in dest_at]
-            del want_stems, want_literals, want_move
+                                            list(map(motions.__getitem__, owner)),
+                                            list(map(operands.__getitem__, owner)))
+            dest_names = list(map(names.__getitem__, dest_at))
+            del want_stems, want_literals, order, owner
         else:
             dest_names = self._jointtarget_names(stems, literals, motions, operands)
         # the declarations hold the literals now: they go (with the names cache, which
@@ -371,47 +386,40 @@ class _Emitter:
             return
         # the statements in the order of the move-by-move route: a move's inserted
         # points, then the move
-        all_texts: list[str] = []
-        all_slots: list[JointSlot | None] = []
-        all_modules: list[str] = []
-        all_routines: list[str] = []
-        main_at: list[int] = []
-        inter_at: list[tuple[int, int, int]] = []  # (place in all_texts, segment, row)
-        done = 0
+        var_texts: list[str] = []
+        var_slots: list[JointSlot | None] = []
+        var_checks: list[tuple[int, int]] = []  # (refined segment, row there)
+        var_counts: list[int] = []
+        insert_at: list[int] = []
+        insert_texts: list[str] = []
         for k, (span, points, approach, segment) in extras.items():
-            main_at.extend(range(len(all_texts), len(all_texts) + k - done))
-            all_texts += statements[done:k]
-            all_slots += slots[done:k]
-            all_modules += modules[done:k]
-            all_routines += routines[done:k]
-            first = extra_at[k]
+            first = dest_at[k] + 1
             lines, variants, variant_slots = self._points_before(
                 sites[k], span, names[first:first + len(points)],
                 names[first + len(points)] if approach is not None else None,
                 (heads[k], tails[k]))
-            for j, variant in enumerate(variants):
-                inter_at.append((len(all_texts), segment, span[0] + j))
-                all_texts.append(variant)
-                all_modules.append(modules[k])
-                all_routines.append(routines[k])
-            all_slots += variant_slots
+            if variants:
+                var_texts += variants
+                var_slots += variant_slots
+                var_checks += [(segment, span[0] + j) for j in range(len(variants))]
+            var_counts.append(len(variants))
             if lines:
-                self.editor.insert(starts[k], "".join(lines))
-            main_at.append(len(all_texts))
-            all_texts.append(statements[k])
-            all_slots.append(slots[k])
-            all_modules.append(modules[k])
-            all_routines.append(routines[k])
-            done = k + 1
-        main_at.extend(range(len(all_texts), len(all_texts) + len(sites) - done))
-        all_texts += statements[done:]
-        all_slots += slots[done:]
-        all_modules += modules[done:]
-        all_routines += routines[done:]
+                insert_at.append(starts[k])
+                insert_texts.append("".join(lines))
+        counts[:] = 0
+        counts[keys] = var_counts
+        main_at, inter_at, order, owner = _interleave(counts, before=True)
+        all_texts = list(map((statements + var_texts).__getitem__, order))
+        all_slots = list(map((slots + var_slots).__getitem__, order))
+        all_modules = list(map(modules.__getitem__, owner))
+        all_routines = list(map(routines.__getitem__, owner))
+        del var_texts, var_slots, order, owner
+        self.editor.replace_many(insert_at, insert_at, insert_texts)
         self.editor.replace_many(starts, ends, statements)
         idents = self.units.add_statements(all_modules, all_routines, all_texts, all_slots)
-        self._add_checks([idents[n] for n in main_at], rows)
-        self.inter_checks.extend((idents[n], segment, row) for n, segment, row in inter_at)
+        self._add_checks(list(map(idents.__getitem__, main_at)), rows)
+        self.inter_checks.extend((idents[n], segment, row)
+                                 for n, (segment, row) in zip(inter_at, var_checks))
 
     def _jointtarget_names(self, stems: list[str], literals: list[str],
                            motions: list[MotionInstruction], operands: list[Operand]

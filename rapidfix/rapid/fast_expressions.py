@@ -133,11 +133,14 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
-    # next tried: a function call of a name and numbers, written without spaces, as most
-    # targets moved by Offs or RelTool are (`Offs(p7,0,0,-10)`): what `term` takes, in
-    # one pass
-    named_call = (rf"(?={NAME_START}){value_name}\((?={NAME_START}){value_name}"
-                  rf"(?:,(?:-{WS}*)?{number})+\)(?={WS}*[,;\\])")
+    # next tried: a function call of a name and numbers, as most targets moved by Offs
+    # or RelTool are (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -10)`, `RelTool(p7, 0, 0, 5
+    # \\Rz:=45)`): what `term` takes, in one pass (every piece is followed by
+    # something that cannot start it again, so there is one way to take each text)
+    named_call = (rf"(?={NAME_START}){value_name}\({WS}*(?={NAME_START}){value_name}"
+                  rf"(?:{WS}*,{WS}*(?:-{WS}*)?{number})+"
+                  rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*(?:-{WS}*)?{number})*"
+                  rf"{WS}*\)(?={WS}*[,;\\])")
 
     def argument(value: str) -> str:
         """`\\Name:=` or nothing before a value, or a switch `\\Name`."""

@@ -942,6 +942,8 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 calls.append(_assignment(text, base, m.start(1), assign, pos))
                 continue
         tail = tails.get(tail_text)
+        if type(tail) is tuple:
+            tail = _made_tail(tails, tail_text, tail)
         lead = head_arg = second_arg = None
         if first is None and tail is None:  # optional arguments first (`MoveJ \Conc, p1`)?
             piece = piece_at(text, tail_at)
@@ -962,6 +964,8 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                 tail_at = piece.end()
                 tail_text = text[tail_at:pos]
                 tail = tails.get(tail_text)
+                if type(tail) is tuple:
+                    tail = _made_tail(tails, tail_text, tail)
         elif first is not None:
             at = base + m.start(2)
             node = _head_node(first, at)
@@ -973,12 +977,16 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
                     rest_at = piece.end()
                     rest_text = text[rest_at:pos]
                     rest = tails.get(rest_text)
+                    if type(rest) is tuple:
+                        rest = _made_tail(tails, rest_text, rest)
                     if rest is not None:  # the rest is known: two leading arguments
                         at = base + piece.start(4)
                         node = _value_node(second, at)
                         second_arg = argument(at, node.end, "required", None, node)
-                        # and the tail after the first, for calls that repeat all of it
-                        tails.keep(tail_text, rest.with_first(node, rest_at - tail_at))
+                        # and the tail after the first, for calls that repeat all of it:
+                        # made when one does (an arc's tail names its end point, which
+                        # hardly recurs)
+                        tails.keep(tail_text, (rest, node, rest_at - tail_at))
                         tail, tail_at = rest, rest_at
                     else:
                         tail = CallTail(tail_text)
@@ -998,6 +1006,14 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     if blocks:  # pragma: no cover - the lexer takes an IF block with its ENDIF only
         raise NotFast(text[:40])
     return calls
+
+
+def _made_tail(tails: Memo, text: str, pending: tuple[CallTail, s.Expr, int]) -> CallTail:
+    """The CallTail split_calls kept for `text` as (the tail after its first argument,
+    that argument's node, where the rest starts): made now, and kept in its place."""
+    rest, node, cut = pending
+    tail = tails[text] = rest.with_first(node, cut)
+    return tail
 
 
 def _condition(head: re.Match[str], base: int) -> s.Expr:
@@ -1027,10 +1043,14 @@ def _head_node(text: str, at: int) -> s.Expr:
     return _value_node(text, at)
 
 
-# A function call of a data name and decimal numbers written without spaces
-# (`Offs(p7,0,0,-10)`, `RelTool(p3,0,0,5)`): a move's target as most programs write it
+# A function call of a data name and decimal numbers, with optional arguments of numbers
+# (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -10)`, `RelTool(p3,0,0,5\Rz:=90)`): a move's
+# target as most programs write it. (The tail after the name is read as `_call_node`
+# reads it: whatever stands there, this only says that the call is of that form.)
+_DECIMAL = rf"-?{WS}*(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _NAMED_CALL = re.compile(
-    rf"({NAME})\(({NAME})((?:,-?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)+\))")
+    rf"({NAME})\({WS}*({NAME})((?:{WS}*,{WS}*{_DECIMAL})+"
+    rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_DECIMAL})*{WS}*\))")
 
 
 def _named_call(text: str, start: int) -> s.LazyFunctionCall | None:

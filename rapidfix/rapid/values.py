@@ -202,8 +202,11 @@ def _robtarget_fits(value: Value) -> bool:
     if type(value) is not tuple or len(value) != 4:
         return False
     trans, rot, conf, extax = value
-    if type(trans) is not tuple or len(trans) != 3 \
-            or not all(map(isinstance, trans, repeat(float))):
+    if type(trans) is not tuple or len(trans) != 3:
+        return False
+    x, y, z = trans
+    if not ((type(x) is float and type(y) is float and type(z) is float)
+            or all(map(isinstance, trans, repeat(float)))):  # (float's subclasses too)
         return False
     known = _REST_FITS.get(id(rot))
     if known is not None and known[0] is rot and known[1] is conf and known[2] is extax:

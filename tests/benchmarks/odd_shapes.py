@@ -43,6 +43,10 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                point, `ArcLEnd`, seam, weld and weave data; MoveJ between the seams
 - wrapped:     a post that wraps long lines: every inline target goes on over a second
                line, so a statement spans two
+- hand_offs:   a hand-written pick and place: MoveJ above each point by `Offs`, MoveL down
+               to it and up again, every call spaced after its commas
+- reltool:     a deburring post: every target turned and drawn back by
+               `RelTool(p, 0, 0, -2 \\Rz:=30)`, spaced or tight
 - scoped:      a system module (`MODULE m(SYSMODULE, NOSTEPIN)`) of LOCAL, TASK PERS and
                VAR targets, LOCAL routines, moves with `\\TLoad` (some with `load0`, the
                tool's own load) and GripLoad between them
@@ -64,7 +68,8 @@ from rapidfix.kinematics import load_robot
 ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules", "wide",
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
-              "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped")
+              "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
+              "reltool")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -465,6 +470,29 @@ def _scoped(n: int) -> list[str]:
     return [*head, *loads, *decls, *routines, "ENDMODULE"]
 
 
+def _hand_offs(n: int) -> list[str]:
+    """A hand-written pick-and-place: above each point by Offs, down to it, up again,
+    every call spaced after its commas, as RobotStudio's editor and people write."""
+    moves = []
+    points = max(1, n // 3)
+    for k in range(points):
+        lift = 20 + 10 * (k % 5)
+        moves += [f"    MoveJ Offs(p{k}, 0, 0, {lift}), v1000, z50, tMill\\WObj:=wPlate;",
+                  f"    MoveL p{k}, v200, fine, tMill\\WObj:=wPlate;",
+                  f"    MoveL Offs(p{k}, 0, 0, {lift}), v1000, z10, tMill\\WObj:=wPlate;"]
+    return [*_head("HandOffs"), *_decls(points), *_parts(moves, 300), "ENDMODULE"]
+
+
+def _reltool(n: int) -> list[str]:
+    """A deburring post: every target turned about the tool's z axis and drawn back along
+    it by RelTool with `\\Rz`, spaced or tight."""
+    moves = [f"    MoveL RelTool(p{k}, 0, 0, -{k % 4} \\Rz:={(k * 7) % 90 - 45}), v100, z1, "
+             "tMill\\WObj:=wPlate;" if k % 2 else
+             f"    MoveL RelTool(p{k},0,0,-5\\Rz:={k % 30}),v100,z1,tMill\\WObj:=wPlate;"
+             for k in range(n)]
+    return [*_head("RelTool"), *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -476,7 +504,7 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "remarks": _remarks, "spaced": _spaced,
              "latin1": _latin1, "concurrent": _concurrent, "flips": _flips,
              "lone_cr": _lone_cr, "arc_weld": _arc_weld, "wrapped": _wrapped,
-             "scoped": _scoped}
+             "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

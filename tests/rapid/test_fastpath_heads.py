@@ -256,19 +256,31 @@ _NUMBER_TEXTS = st.sampled_from(["0", "-0", "10", "-0.5", "1.", ".5", "-1e3", "2
 _HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "ORIENT", "p10x"])
 
 
+_GAPS = st.sampled_from(["", "", " ", "  ", "\t", "\n  "])
+
+
 @st.composite
 def named_call(draw: st.DrawFn) -> str:
-    """A call of a name and numbers as a move's target, tight or with a space somewhere."""
+    """A call of a name and numbers as a move's target, tight or spaced, perhaps with
+    optional arguments of numbers, and perhaps with a space or a piece put anywhere."""
     name = draw(st.sampled_from(["Offs", "RelTool", "Foo", "offs"]))
     numbers = draw(st.lists(_NUMBER_TEXTS, min_size=1, max_size=4))
-    text = f"{name}({draw(_HEAD_NAMES)},{','.join(numbers)})"
-    if draw(st.booleans()):  # a space or a switch the one-pattern route does not take
+    text = f"{name}({draw(_GAPS)}{draw(_HEAD_NAMES)}"
+    for number in numbers:
+        text += f"{draw(_GAPS)},{draw(_GAPS)}{number}"
+    for _ in range(draw(st.integers(0, 2))):
+        option = draw(st.sampled_from(["Rz", "Rx", "A1", "TRUE"]))
+        text += f"{draw(_GAPS)}\\{draw(_GAPS)}{option}{draw(_GAPS)}:={draw(_GAPS)}"
+        text += draw(_NUMBER_TEXTS)
+    text += f"{draw(_GAPS)})"
+    if draw(st.booleans()):  # a space or a piece the one-pattern route does not take
         at = draw(st.integers(0, len(text) - 1))
-        text = text[:at] + draw(st.sampled_from([" ", "\\Rz:=90,", "\n"])) + text[at:]
+        text = text[:at] + draw(st.sampled_from([" ", "\\Rz:=90,", "\n", "\\Rz", "n",
+                                                 ",", "+"])) + text[at:]
     return text
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(named_call())
 def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_grammar_read_it(text):
     from rapidfix.rapid import fastpath

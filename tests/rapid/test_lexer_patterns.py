@@ -92,9 +92,13 @@ def _plain_value(draw) -> str:
     if kind == "aggregate":
         return draw(st.sampled_from(_AGGREGATES))
     numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
-    spaced = draw(st.sampled_from(["", " "]))
-    return (f"{draw(st.sampled_from(_NAMES))}({draw(st.sampled_from(_NAMES))},"
-            f"{(',' + spaced).join(numbers)})")
+    text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
+    for number in numbers:
+        text += f"{draw(_SPACE)},{draw(_SPACE)}{number}"
+    for _ in range(draw(st.integers(0, 2))):  # optional arguments of numbers
+        text += (f"{draw(_SPACE)}\\{draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
+                 f"{draw(_SPACE)}:={draw(_SPACE)}{draw(st.sampled_from(_NUMBERS))}")
+    return text + f"{draw(_SPACE)})"
 
 
 @st.composite
@@ -129,6 +133,8 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
     plain = _patterns()["plain_call"]
     for statement in ["MoveL p5, v200, z0, tMill\\WObj:=wPlate;",
                       "MoveJ Offs(p7,0,0,-10),v100,z1,tool0;",
+                      "MoveL Offs(p7, 0, 0, -10), v1000, z50, tool1\\WObj:=wobj1;",
+                      "MoveL RelTool(p7, 0, 0, -10 \\Rz:=45), v100, fine, tool1;",
                       "MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
                       "v100,fine,tool0\\WObj:=wobj1;",
                       "MoveC p1, p2, v100 \\V:=120, z1, tool0;",
