@@ -1043,14 +1043,15 @@ def _head_node(text: str, at: int) -> s.Expr:
     return _value_node(text, at)
 
 
-# A function call of a data name and decimal numbers, with optional arguments of numbers
-# (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -10)`, `RelTool(p3,0,0,5\Rz:=90)`): a move's
-# target as most programs write it. (The tail after the name is read as `_call_node`
-# reads it: whatever stands there, this only says that the call is of that form.)
-_DECIMAL = rf"-?{WS}*(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+# A function call of a data name and decimal numbers or names, with optional arguments
+# of those (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p3,0,0,5\Rz:=90)`):
+# a move's target as most programs write it. (The tail after the name is read as
+# `_call_node` reads it: whatever stands there, this only says that the call is of that
+# form.)
+_OFFSET = rf"(?:-{WS}*)?(?:\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?|{NAME})"
 _NAMED_CALL = re.compile(
-    rf"({NAME})\({WS}*({NAME})((?:{WS}*,{WS}*{_DECIMAL})+"
-    rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_DECIMAL})*{WS}*\))")
+    rf"({NAME})\({WS}*({NAME})((?:{WS}*,{WS}*{_OFFSET})+"
+    rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_OFFSET})*{WS}*\))")
 
 
 def _named_call(text: str, start: int) -> s.LazyFunctionCall | None:

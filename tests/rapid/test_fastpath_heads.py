@@ -257,21 +257,25 @@ _HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "O
 
 
 _GAPS = st.sampled_from(["", "", " ", "  ", "\t", "\n  "])
+# an offset: a number, or a name (negated, a component, a keyword, a digit after it)
+_OFFSETS = st.one_of(_NUMBER_TEXTS, st.sampled_from(
+    ["nLift", "-nLift", "- n2", "n.x", "TRUE", "MOD", "nA{2}", "f(1)", "n1e5"]))
 
 
 @st.composite
 def named_call(draw: st.DrawFn) -> str:
-    """A call of a name and numbers as a move's target, tight or spaced, perhaps with
-    optional arguments of numbers, and perhaps with a space or a piece put anywhere."""
+    """A call of a name and numbers (or names) as a move's target, tight or spaced,
+    perhaps with optional arguments of those, and perhaps with a space or a piece put
+    anywhere."""
     name = draw(st.sampled_from(["Offs", "RelTool", "Foo", "offs"]))
-    numbers = draw(st.lists(_NUMBER_TEXTS, min_size=1, max_size=4))
+    numbers = draw(st.lists(_OFFSETS, min_size=1, max_size=4))
     text = f"{name}({draw(_GAPS)}{draw(_HEAD_NAMES)}"
     for number in numbers:
         text += f"{draw(_GAPS)},{draw(_GAPS)}{number}"
     for _ in range(draw(st.integers(0, 2))):
         option = draw(st.sampled_from(["Rz", "Rx", "A1", "TRUE"]))
         text += f"{draw(_GAPS)}\\{draw(_GAPS)}{option}{draw(_GAPS)}:={draw(_GAPS)}"
-        text += draw(_NUMBER_TEXTS)
+        text += draw(_OFFSETS)
     text += f"{draw(_GAPS)})"
     if draw(st.booleans()):  # a space or a piece the one-pattern route does not take
         at = draw(st.integers(0, len(text) - 1))

@@ -93,11 +93,14 @@ def _plain_value(draw) -> str:
         return draw(st.sampled_from(_AGGREGATES))
     numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
     text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
+    offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}"])
     for number in numbers:
         text += f"{draw(_SPACE)},{draw(_SPACE)}{number}"
-    for _ in range(draw(st.integers(0, 2))):  # optional arguments of numbers
+    for _ in range(draw(st.integers(0, 2))):  # names among them
+        text += f"{draw(_SPACE)},{draw(_SPACE)}{draw(offsets)}"
+    for _ in range(draw(st.integers(0, 2))):  # optional arguments of numbers or names
         text += (f"{draw(_SPACE)}\\{draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
-                 f"{draw(_SPACE)}:={draw(_SPACE)}{draw(st.sampled_from(_NUMBERS))}")
+                 f"{draw(_SPACE)}:={draw(_SPACE)}{draw(offsets)}")
     return text + f"{draw(_SPACE)})"
 
 
@@ -141,4 +144,6 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
                       "SetDO doGrip, 1;", "Foo a \\Switch, b \\Opt:=- 2;"]:
         assert re.fullmatch(plain, statement), statement
     assert not re.fullmatch(plain, "MoveL p1, v100, z1, tool0, ;")
-    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n), v100, z1, tool0;")
+    assert re.fullmatch(plain, "MoveL Offs(p1, 0, 0, -nLift), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n.z), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n*2), v100, z1, tool0;")
