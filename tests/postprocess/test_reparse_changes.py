@@ -252,6 +252,27 @@ def _arcs() -> str:
     return "\n".join(lines) + "\n"
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(0, 4), min_size=1, max_size=30), st.booleans())
+def test_moves_and_their_inserted_points_are_placed_as_one_list(counts, before):
+    """`_interleave` (how the emission orders each move's name or statement with those of
+    the points inserted before it) against the list built one move at a time."""
+    items = [f"m{j}" for j in range(len(counts))]
+    extras = [f"m{j}x{t}" for j, c in enumerate(counts) for t in range(c)]
+    expected, owners, at = [], [], 0
+    for j, c in enumerate(counts):
+        own = extras[at:at + c]
+        at += c
+        expected += [*own, items[j]] if before else [items[j], *own]
+        owners += [j] * (c + 1)
+    places, extra_places, order, owner = emission_module._interleave(
+        np.array(counts, dtype=np.int64), before)
+    assert [(items + extras)[n] for n in order] == expected
+    assert [expected[n] for n in places] == items
+    assert [expected[n] for n in extra_places] == extras
+    assert owner == owners
+
+
 @pytest.mark.parametrize("emit", ["jointtargets", "robtargets"])
 @pytest.mark.parametrize("name", [*PROGRAMS, "cam", "filtered_cases", "stacked", "arcs",
                                   "concurrent"])

@@ -114,6 +114,32 @@ def test_approach_points_are_planned_and_emitted_for_fine_movej():
     assert approach_points
 
 
+def test_approach_and_intermediate_points_are_emitted_as_columns_as_move_by_move(monkeypatch):
+    """Fine MoveJ (approach points) between arcs and lines (intermediate points), some
+    moves with both: the emission in columns writes what the move-by-move route writes."""
+    import sys
+
+    from rapidfix.postprocess import emission as emission_module
+
+    sys.path.insert(0, str(SAMPLES.parent / "tests" / "benchmarks"))
+    from program_shapes import shape_program
+
+    lines = []
+    for k, line in enumerate(shape_program("movec", 240).splitlines()):
+        if line.lstrip().startswith("MoveL ") and k % 3 == 0:  # a fine MoveJ between arcs
+            line = line.replace("MoveL ", "MoveJ ").replace(", z1,", ", fine,")
+        lines.append(line)
+    data = ("\n".join(lines) + "\n").encode()
+    comp = _backlash_comp()
+    options = RewriteOptions(approach=True, force=True)
+    columns = rewrite_source(data, "arcs.mod", comp, options)
+    monkeypatch.setattr(emission_module._Emitter, "_columns", False)
+    one_by_one = rewrite_source(data, "arcs.mod", comp, options)
+    assert columns.data == one_by_one.data
+    assert columns.points_added > 20
+    assert sum(name.endswith("_app") for name in columns.inserted) > 10
+
+
 @pytest.mark.parametrize("name", ["milling.mod", "palletizer.prg"])
 def test_the_output_is_rendered_after_the_program_model_is_gone(comp, name, monkeypatch):
     """The rewrite renders in the memory the syntax tree, the model and the plan held

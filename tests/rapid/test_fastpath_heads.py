@@ -338,3 +338,25 @@ def test_a_run_holding_an_if_block_is_left_to_the_full_read_back():
     assert [c[0] for c in read_bulk(plain).calls] == ["MoveL", "MoveL"]
     assert read_bulk(routine("MoveL p1,v100,z1,tool0;",
                              "IF a THEN MoveL p2,v100,z1,tool0; ENDIF")) is None
+
+
+# ------------------------------------------------ arcs: the tail after the first target
+def test_the_tail_after_an_arcs_first_target_is_made_when_a_call_repeats_it():
+    """split_calls keeps the tail after an arc's first target unmade (an arc's end point
+    hardly recurs) and makes it when a call repeats it, as its tail or as the rest after
+    its second argument: the same trees as the plain grammar's."""
+    from rapidfix.rapid import fastpath
+
+    fastpath.forget_texts()
+    first = routine("MoveL p9, v100, z1, tool0;", "MoveC p1, p2, v100, z1, tool0;")
+    assert shape(fast_parser().parse(first)) == plain_tree(first)
+    assert type(fastpath._TAILS[", p2, v100, z1, tool0;"]) is tuple  # kept unmade
+    again = routine("MoveC p3, p2, v100, z1, tool0;",  # the whole tail again
+                    "MoveC Offs(p1,0,0,1), p2, v100, z1, tool0;",
+                    "Foo a, p4, p2, v100, z1, tool0;",  # as the rest after a second
+                    "MoveC p5, p6, v100, z1, tool0;", "MoveC p7, p6, v100, z1, tool0;")
+    fastpath.forget_texts()
+    fastpath._TAILS.clear()
+    assert shape(fast_parser().parse(first)) == plain_tree(first)
+    assert shape(fast_parser().parse(again)) == plain_tree(again)
+    assert isinstance(fastpath._TAILS[", p2, v100, z1, tool0;"], fastpath.CallTail)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -95,3 +96,7 @@ def test_a_shared_rest_is_judged_once_and_each_position_still_checked():
     # the same orientation tuple with other confdata is judged on its own
     assert not fits_type("robtarget", ((1.0, 2.0, 3.0), rot, (0.0, math.nan, 0.0, 0.0), extax))
     assert not fits_type("robtarget", ((1.0, 2.0, 3.0), rot, conf, (9e9,) * 5))
+    # a position of float's subclasses (numpy's) fits as before; a bool or int does not
+    assert fits_type("robtarget", ((np.float64(1.0), 2.0, np.float64(3.0)), rot, conf, extax))
+    assert not fits_type("robtarget", ((True, 2.0, 3.0), rot, conf, extax))
+    assert not fits_type("robtarget", ((1, 2.0, 3.0), rot, conf, extax))
