@@ -128,7 +128,8 @@ class Curves:
         a, b = self.start[seg_l, :3, 3], self.end[seg_l, :3, 3]
         out[on_line] = a + s_l[:, None] * (b - a)
         seg_c, s_c = seg[on_arc], s[on_arc]
-        centre, radius, u, v, _, sweep = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        geom = self._geom  # type: ignore[attr-defined]
+        centre, radius, u, v, sweep = (geom[i][seg_c] for i in (0, 1, 2, 3, 5))
         phi = s_c * sweep
         out[on_arc] = centre + radius[:, None] * (np.cos(phi)[:, None] * u
                                                   + np.sin(phi)[:, None] * v)
@@ -154,7 +155,8 @@ class Curves:
         t = np.clip(np.sum((p - a) * ab, axis=1) / np.where(length2 > 0, length2, 1.0), 0, 1)
         out[on_line] = np.linalg.norm(p - a - t[:, None] * ab, axis=1)
         seg_c, p = seg[on_arc], points[on_arc]
-        centre, radius, _, _, nrm, _ = (g[seg_c] for g in self._geom)  # type: ignore[attr-defined]
+        geom = self._geom  # type: ignore[attr-defined]
+        centre, radius, nrm = (geom[i][seg_c] for i in (0, 1, 4))
         d = p - centre
         h = np.sum(d * nrm, axis=1)
         r = np.linalg.norm(d - h[:, None] * nrm, axis=1)
