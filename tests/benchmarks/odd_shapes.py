@@ -47,6 +47,8 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                to it and up again, every call spaced after its commas
 - reltool:     a deburring post: every target turned and drawn back by
                `RelTool(p, 0, 0, -2 \\Rz:=30)`, spaced or tight
+- lower:       a program typed in lower case: keywords, instructions, type names, TRUE
+               and FALSE, `\\wobj:=`
 - scoped:      a system module (`MODULE m(SYSMODULE, NOSTEPIN)`) of LOCAL, TASK PERS and
                VAR targets, LOCAL routines, moves with `\\TLoad` (some with `load0`, the
                tool's own load) and GripLoad between them
@@ -57,6 +59,7 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 from __future__ import annotations
 
 import functools
+import re
 
 import numpy as np
 from cam_program import ROBOT, ROT, TOOL, WOBJ, _frame, cam_positions
@@ -69,7 +72,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
-              "reltool")
+              "reltool", "lower")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -493,6 +496,16 @@ def _reltool(n: int) -> list[str]:
     return [*_head("RelTool"), *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _lower(n: int) -> list[str]:
+    """A program typed in lower case (RAPID's words are case-insensitive): keywords,
+    instructions, type names, TRUE/FALSE and optional argument names."""
+    moves = [f"    {('movel', 'movej')[k % 2]} p{k},v100,z1,tMill\\wobj:=wPlate;" for k in range(n)]
+    words = re.compile(r"\b(MODULE|ENDMODULE|PROC|ENDPROC|CONST|PERS|VAR|robtarget|tooldata|"
+                       r"wobjdata|speeddata|TRUE|FALSE)\b")
+    return [words.sub(lambda m: m.group().lower(), line)
+            for line in [*_head("Lower"), *_decls(n), *_parts(moves), "ENDMODULE"]]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -504,7 +517,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "remarks": _remarks, "spaced": _spaced,
              "latin1": _latin1, "concurrent": _concurrent, "flips": _flips,
              "lone_cr": _lone_cr, "arc_weld": _arc_weld, "wrapped": _wrapped,
-             "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool}
+             "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool,
+             "lower": _lower}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
