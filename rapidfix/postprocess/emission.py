@@ -320,8 +320,7 @@ class _Emitter:
         stems = self._stems(motions, operands)
         # the jointtargets in the order their names are first asked for: each move's
         # destination, then the points inserted before it
-        if extras:
-            # each move's destination, then the points inserted before it (`_interleave`)
+        if extras:  # (placed among the destinations by `_interleave`)
             keys = list(extras)
             ex_stems: list[str] = []
             ex_literals: list[str] = []

@@ -5,6 +5,8 @@ its header."""
 from __future__ import annotations
 
 import re
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ import pytest
 from rapidfix.error_model.candidates.backlash import Backlash
 from rapidfix.error_model.model import ErrorModel
 from rapidfix.kinematics import load_robot
+from rapidfix.postprocess import emission as emission_module
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.emission import emit_edits
 from rapidfix.postprocess.header import MARK
@@ -21,6 +24,9 @@ from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_source
 from rapidfix.rapid import parse_owned, parse_program
 
 from .conftest import SAMPLES
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from program_shapes import shape_program
 
 PROGRAMS = sorted(p.name for p in SAMPLES.iterdir() if p.suffix.lower() in (".mod", ".prg"))
 #: a header line as the rewrite inserts it (the same pattern --force strips)
@@ -117,13 +123,6 @@ def test_approach_points_are_planned_and_emitted_for_fine_movej():
 def test_approach_and_intermediate_points_are_emitted_as_columns_as_move_by_move(monkeypatch):
     """Fine MoveJ (approach points) between arcs and lines (intermediate points), some
     moves with both: the emission in columns writes what the move-by-move route writes."""
-    import sys
-
-    from rapidfix.postprocess import emission as emission_module
-
-    sys.path.insert(0, str(SAMPLES.parent / "tests" / "benchmarks"))
-    from program_shapes import shape_program
-
     lines = []
     for k, line in enumerate(shape_program("movec", 240).splitlines()):
         if line.lstrip().startswith("MoveL ") and k % 3 == 0:  # a fine MoveJ between arcs
