@@ -49,6 +49,14 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                `RelTool(p, 0, 0, -2 \\Rz:=30)`, spaced or tight
 - lower:       a program typed in lower case: keywords, instructions, type names, TRUE
                and FALSE, `\\wobj:=`
+- upper:       the same in upper case throughout, names and all
+- exponent:    positions written in exponent form (`-1.495000E+02`)
+- data_last:   the routines first, the targets declared after them
+- elements:    targets in arrays of a hundred declared over lines, every move to one element
+               (`MoveL seam3{17}, ...`)
+- routine_targets: a pick routine taking its target as a parameter, called once per
+               point after a move above it, with `MoveLDO` (its moves are known only at
+               run time)
 - scoped:      a system module (`MODULE m(SYSMODULE, NOSTEPIN)`) of LOCAL, TASK PERS and
                VAR targets, LOCAL routines, moves with `\\TLoad` (some with `load0`, the
                tool's own load) and GripLoad between them
@@ -72,7 +80,8 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "assign", "io", "loops", "failing", "records", "messages", "conditions",
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
-              "reltool", "lower")
+              "reltool", "lower", "upper", "exponent", "data_last", "elements",
+              "routine_targets")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -506,6 +515,58 @@ def _lower(n: int) -> list[str]:
             for line in [*_head("Lower"), *_decls(n), *_parts(moves), "ENDMODULE"]]
 
 
+def _upper(n: int) -> list[str]:
+    """A program in upper case throughout, names and all (`MOVEL P1,V100,...`)."""
+    moves = [f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;" for k in range(n)]
+    return [line.upper() for line in [*_head("Upper"), *_decls(n), *_parts(moves), "ENDMODULE"]]
+
+
+def _exponent(n: int) -> list[str]:
+    """Positions written in exponent form (`-1.495000E+02`), integer orientations."""
+    trans, confs = _targets(n)
+    decls = []
+    for i in range(n):
+        x, y, z = (float(v) for v in trans[i].strip("[]").split(","))
+        decls.append(f"  CONST robtarget p{i}:=[[{x:.6E},{y:.6E},{z:.6E}],"
+                     f"{_robtarget('[0,0,0]', confs[i])[9:]};")
+    moves = [f"    MoveJ p{k},v500,z10,tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("Exponent"), *decls, *_parts(moves), "ENDMODULE"]
+
+
+def _data_last(n: int) -> list[str]:
+    """The routines first, the targets they move to declared after them."""
+    moves = [f"    MoveL p{k}, v100, z1, tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("DataLast"), *_parts(moves), *_decls(n), "ENDMODULE"]
+
+
+def _elements(n: int) -> list[str]:
+    """Targets held in arrays of a hundred (declared over lines), every move to one
+    element by its index (`MoveL seam3{17}, ...`)."""
+    trans, confs = _targets(n)
+    out = [*_head("Elements")]
+    for a in range(0, n, 100):
+        items = ",\n    ".join(_robtarget(trans[i], confs[i]) for i in range(a, min(n, a + 100)))
+        out.append(f"  CONST robtarget seam{a // 100}{{{min(n, a + 100) - a}}}:=[\n    {items}];")
+    moves = [f"    MoveL seam{k // 100}{{{k % 100 + 1}}}, v100, z1, tMill\\WObj:=wPlate;"
+             for k in range(n)]
+    return [*out, *_parts(moves), "ENDMODULE"]
+
+
+def _routine_targets(n: int) -> list[str]:
+    """A pick routine that takes its target as a parameter, called once per point after
+    a move above it, and `MoveLDO` setting the gripper: the routine's moves are known only
+    at run time, the moves above the points before it."""
+    calls = [line for k in range(n) for line in (
+        f"    MoveJ Offs(p{k}, 0, 0, 100), v1000, z50, tMill\\WObj:=wPlate;",
+        f"    Pick p{k}, {10 + k % 5 * 10};")]
+    pick = ["  PROC Pick(robtarget pPos, num nHeight)",
+            "    MoveJ Offs(pPos, 0, 0, nHeight), v1000, z50, tMill\\WObj:=wPlate;",
+            "    MoveLDO pPos, v200, fine, tMill\\WObj:=wPlate, doGrip, 1;",
+            "    MoveL Offs(pPos, 0, 0, nHeight), v1000, z10, tMill\\WObj:=wPlate;",
+            "  ENDPROC"]
+    return [*_head("RoutineTargets"), *_decls(n), *pick, *_parts(calls), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -518,7 +579,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "latin1": _latin1, "concurrent": _concurrent, "flips": _flips,
              "lone_cr": _lone_cr, "arc_weld": _arc_weld, "wrapped": _wrapped,
              "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool,
-             "lower": _lower}
+             "lower": _lower, "upper": _upper, "exponent": _exponent, "data_last": _data_last,
+             "elements": _elements, "routine_targets": _routine_targets}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

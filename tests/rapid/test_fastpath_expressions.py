@@ -447,6 +447,10 @@ NAMED_CALLS = [
     "MoveL Offs(p1,0,0,n.z),v100,z1,tool0;",
     "MoveL Offs(p1,0,0,TRUE),v100,z1,tool0;",
     "MoveL RelTool(p1, 0, 0, -nDepth \\Rz:=nTurn), v100, z1, tool0;",
+    "MoveL Offs([[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], 0, 0, 10), v100, "
+    "z1, tool0;",
+    "MoveL Offs( [[1, 2, 3], [1, 0, 0, 0]] ,0,0,-nLift),v100,z1,tool0;",
+    "MoveL Offs([[1-1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],0,0,1),v100,z1,tool0;",
     "MoveL RelTool(p1,0,0,0,\\Rz:=5),v100,z1,tool0;",
     "MoveL RelTool(p1,0,0,0\\Rz),v100,z1,tool0;",
     "MoveL RelTool(p1, 0, 0, 0 \\Rz:=5) \\Conc, v100, z1, tool0;",

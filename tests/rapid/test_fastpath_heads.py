@@ -253,7 +253,9 @@ def test_a_late_error_after_many_fast_procedure_heads_is_explained_as_in_full():
 # ------------------------------------------------ a move's target `Offs(p7,0,0,-10)`
 _NUMBER_TEXTS = st.sampled_from(["0", "-0", "10", "-0.5", "1.", ".5", "-1e3", "2E-2", "0x1F",
                                  "1.5e+2", "-.25", "007"])
-_HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "ORIENT", "p10x"])
+_HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "ORIENT", "p10x",
+                                "[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]",
+                                "[[1, 2,3],[1,0,0,0]]", "[[1,2]", "[1-1,2]"])
 
 
 _GAPS = st.sampled_from(["", "", " ", "  ", "\t", "\n  "])

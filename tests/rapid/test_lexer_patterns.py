@@ -92,7 +92,8 @@ def _plain_value(draw) -> str:
     if kind == "aggregate":
         return draw(st.sampled_from(_AGGREGATES))
     numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
-    text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{draw(st.sampled_from(_NAMES))}"
+    head = draw(st.sampled_from(_NAMES + _AGGREGATES))  # a name, or an inline target
+    text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{head}"
     offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}"])
     for number in numbers:
         text += f"{draw(_SPACE)},{draw(_SPACE)}{number}"
@@ -138,6 +139,8 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
                       "MoveJ Offs(p7,0,0,-10),v100,z1,tool0;",
                       "MoveL Offs(p7, 0, 0, -10), v1000, z50, tool1\\WObj:=wobj1;",
                       "MoveL RelTool(p7, 0, 0, -10 \\Rz:=45), v100, fine, tool1;",
+                      "MoveL Offs([[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], "
+                      "0, 0, 10), v100, z1, tool1;",
                       "MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
                       "v100,fine,tool0\\WObj:=wobj1;",
                       "MoveC p1, p2, v100 \\V:=120, z1, tool0;",
