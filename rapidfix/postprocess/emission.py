@@ -334,9 +334,9 @@ class _Emitter:
                     ex_stems.append(f"{stem}_app")
                     ex_literals.append(approach)
                 ex_counts.append(len(ex_stems) - count)
-            counts = np.zeros(len(sites), dtype=np.int64)
-            counts[keys] = ex_counts
-            dest_at, _, order, owner = _interleave(counts, before=False)
+            per_move = np.zeros(len(sites), dtype=np.int64)
+            per_move[keys] = ex_counts
+            dest_at, _, order, owner = _interleave(per_move, before=False)
             want_stems = list(map((stems + ex_stems).__getitem__, order))
             want_literals = list(map((literals + ex_literals).__getitem__, order))
             del ex_stems, ex_literals
@@ -405,9 +405,9 @@ class _Emitter:
             if lines:
                 insert_at.append(starts[k])
                 insert_texts.append("".join(lines))
-        counts[:] = 0
-        counts[keys] = var_counts
-        main_at, inter_at, order, owner = _interleave(counts, before=True)
+        per_move = np.zeros(len(sites), dtype=np.int64)  # now the statements before each
+        per_move[keys] = var_counts
+        main_at, inter_at, order, owner = _interleave(per_move, before=True)
         all_texts = list(map((statements + var_texts).__getitem__, order))
         all_slots = list(map((slots + var_slots).__getitem__, order))
         all_modules = list(map(modules.__getitem__, owner))
