@@ -133,16 +133,19 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
-    # next tried: a function call of a name (or an aggregate of numbers) and numbers or
-    # names, as most targets moved by Offs or RelTool are (`Offs(p7,0,0,-10)`,
-    # `Offs(p7, 0, 0, -nLift)`, `RelTool(p7, 0, 0, 5 \\Rz:=45)`, `Offs([[...],...],0,0,5)`):
-    # what `term` takes, in one pass (every piece is followed by something that cannot
-    # start it again, so there is one way to take each text)
+    # next tried: a function call of a name (or an aggregate of numbers, or such a call
+    # itself) and numbers or names, as most targets moved by Offs or RelTool are
+    # (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p7, 0, 0, 5 \\Rz:=45)`,
+    # `Offs([[...],...],0,0,5)`, `RelTool(Offs(p7,0,0,10),0,0,0 \\Rz:=45)`): what `term`
+    # takes, in one pass (every piece is followed by something that cannot start it
+    # again, so there is one way to take each text)
     offset = rf"(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
-    named_call = (rf"(?={NAME_START}){value_name}\({WS}*(?:(?={NAME_START}){value_name}"
-                  rf"|(?=\[){loose})(?:{WS}*,{WS}*{offset})+"
-                  rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*{offset})*"
-                  rf"{WS}*\)(?={WS}*[,;\\])")
+    after_first = (rf"(?:{WS}*,{WS}*{offset})+"
+                   rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*{offset})*{WS}*\)")
+    first = rf"(?:(?={NAME_START}){value_name}|(?=\[){loose})"
+    named_call = (rf"(?={NAME_START}){value_name}\({WS}*"
+                  rf"(?:(?={NAME_START}){value_name}(?:\({WS}*{first}{after_first})?"
+                  rf"|(?=\[){loose}){after_first}(?={WS}*[,;\\])")
 
     def argument(value: str) -> str:
         """`\\Name:=` or nothing before a value, or a switch `\\Name`."""

@@ -1044,35 +1044,50 @@ def _head_node(text: str, at: int) -> s.Expr:
 
 
 # A function call of a data name and decimal numbers or names, with optional arguments
-# of those (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p3,0,0,5\Rz:=90)`):
-# a move's target as most programs write it. (The tail after the name is read as
-# `_call_node` reads it: whatever stands there, this only says that the call is of that
-# form.)
+# of those (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p3,0,0,5\Rz:=90)`),
+# or of such a call and those (`RelTool(Offs(p7,0,0,10),0,0,0\Rz:=90)`): a move's target
+# as most programs write it. (The tail after the first argument is read as `_call_node`
+# reads it: whatever stands there, this only says that the call is of that form.)
 _OFFSET = rf"(?:-{WS}*)?(?:\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?|{NAME})"
+_AFTER_FIRST = (rf"(?:{WS}*,{WS}*{_OFFSET})+"
+                rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_OFFSET})*{WS}*\)")
 _NAMED_CALL = re.compile(
-    rf"({NAME})\({WS}*({NAME})((?:{WS}*,{WS}*{_OFFSET})+"
-    rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_OFFSET})*{WS}*\))")
+    rf"({NAME})\({WS}*({NAME}(\({WS}*({NAME})({_AFTER_FIRST}))?)({_AFTER_FIRST})")
 
 
 def _named_call(text: str, start: int) -> s.LazyFunctionCall | None:
     """What _value_node makes of `text` (through _call_node) when it is a call of a name
-    and numbers (`_NAMED_CALL`), read by one pattern; None for any other text."""
+    (or of such a call) and numbers (`_NAMED_CALL`), read by one pattern; None for any
+    other text."""
     m = _NAMED_CALL.fullmatch(text)
     if m is None:
         return None
-    first = m.group(2)
-    if len(first) <= 5 and first.upper() in _BOOLS:  # TRUE, FALSE: not names
+    name_at, name_end = m.span(4)
+    if name_at < 0:  # `Offs(p7,...)`
+        name_at, name_end = m.span(2)
+    name = text[name_at:name_end]
+    if len(name) <= 5 and name.upper() in _BOOLS:  # TRUE, FALSE: not names
         return None
-    tail_at = m.start(3)
-    node = s.NameRef(start + m.start(2), start + tail_at, sys.intern(first))
-    tail_text = m.group(3)
+    node: s.Expr = s.NameRef(start + name_at, start + name_end, sys.intern(name))
+    if name_end != m.end(2):  # `RelTool(Offs(p7,...),...)`: the inner call around it
+        inner_at = m.start(2)
+        node = _lazy_call(text[inner_at:m.start(3)], node, m.group(5), start + inner_at,
+                          start + name_end, start + m.end(2))
+    return _lazy_call(m.group(1), node, m.group(6), start, start + m.start(6),
+                      start + len(text))
+
+
+def _lazy_call(name: str, first: s.Expr, tail_text: str, start: int, tail_at: int,
+               end: int) -> s.LazyFunctionCall:
+    """The LazyFunctionCall `name(first<tail_text>` from `start` to `end`, its tail (read
+    once per distinct text) at `tail_at`."""
     tail = _INNER_TAILS.get(tail_text)
     if tail is None:
         tail = CallTail(tail_text, _INNER_PIECE)
         _INNER_TAILS.keep(tail_text, tail)
-    return s.LazyFunctionCall(start, start + len(text), sys.intern(m.group(1)),
-                              s.Argument(node.start, node.end, "required", None, node),
-                              tail, start + tail_at)
+    return s.LazyFunctionCall(start, end, sys.intern(name),
+                              s.Argument(first.start, first.end, "required", None, first),
+                              tail, tail_at)
 
 
 def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.Assignment:

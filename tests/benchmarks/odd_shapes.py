@@ -81,7 +81,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
-              "routine_targets")
+              "routine_targets", "nested_calls")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -567,6 +567,16 @@ def _routine_targets(n: int) -> list[str]:
     return [*_head("RoutineTargets"), *_decls(n), *pick, *_parts(calls), "ENDMODULE"]
 
 
+def _nested_calls(n: int) -> list[str]:
+    """Targets moved by a call of a call: lifted by Offs and turned by RelTool
+    (`RelTool(Offs(p7,0,0,10),0,0,0\\Rz:=30)`), or the other way round, tight or spaced."""
+    moves = [f"    MoveL RelTool(Offs(p{k},0,0,{k % 4 * 5}),0,0,0\\Rz:={k % 30}),v100,z1,"
+             "tMill\\WObj:=wPlate;" if k % 2 else
+             f"    MoveL Offs(RelTool(p{k}, 0, 0, -5), 0, 0, {k % 3}), v100, z1, "
+             "tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("NestedCalls"), *_decls(n), *_parts(moves), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -580,7 +590,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "lone_cr": _lone_cr, "arc_weld": _arc_weld, "wrapped": _wrapped,
              "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool,
              "lower": _lower, "upper": _upper, "exponent": _exponent, "data_last": _data_last,
-             "elements": _elements, "routine_targets": _routine_targets}
+             "elements": _elements, "routine_targets": _routine_targets,
+             "nested_calls": _nested_calls}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

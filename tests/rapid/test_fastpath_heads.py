@@ -19,6 +19,7 @@ from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, s
 from test_fastpath_expressions import expression
 from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
+from rapidfix.rapid import fastpath
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NotRead, read_expression
 from rapidfix.rapid.fastpath import RUN_LIMIT, fast_parser
@@ -265,13 +266,17 @@ _OFFSETS = st.one_of(_NUMBER_TEXTS, st.sampled_from(
 
 
 @st.composite
-def named_call(draw: st.DrawFn) -> str:
-    """A call of a name and numbers (or names) as a move's target, tight or spaced,
-    perhaps with optional arguments of those, and perhaps with a space or a piece put
-    anywhere."""
+def named_call(draw: st.DrawFn, depth: int = 2) -> str:
+    """A call of a name (or of such a call, down to `depth`) and numbers (or names) as a
+    move's target, tight or spaced, perhaps with optional arguments of those, and
+    perhaps with a space or a piece put anywhere."""
+    if depth == 0:
+        return draw(_HEAD_NAMES)
     name = draw(st.sampled_from(["Offs", "RelTool", "Foo", "offs"]))
     numbers = draw(st.lists(_OFFSETS, min_size=1, max_size=4))
-    text = f"{name}({draw(_GAPS)}{draw(_HEAD_NAMES)}"
+    # the first argument: a name, an inline target, or such a call itself
+    head = draw(_HEAD_NAMES) if draw(st.booleans()) else draw(named_call(depth - 1))
+    text = f"{name}({draw(_GAPS)}{head}"
     for number in numbers:
         text += f"{draw(_GAPS)},{draw(_GAPS)}{number}"
     for _ in range(draw(st.integers(0, 2))):
@@ -289,8 +294,6 @@ def named_call(draw: st.DrawFn) -> str:
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(named_call())
 def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_grammar_read_it(text):
-    from rapidfix.rapid import fastpath
-
     fast = fastpath._named_call(text, 7)
     if fast is not None:  # what _value_node (through _call_node) makes, to the shared tail
         general = fastpath._value_node(text, 7)
@@ -298,6 +301,17 @@ def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_gramma
         assert shape(fast.args) == shape(general.args)
     assert_parses_as_plain(routine(f"MoveL {text},v100,z1,tool0\\WObj:=w;",
                                    f"MoveL {text}, v100, z1, tool0;"))
+
+
+@pytest.mark.parametrize("text", ["Offs(p1,0,0,-10)", "RelTool(p1, 0, 0, -nDepth \\Rz:=45)",
+                                  "RelTool(Offs(p1,0,0,10),0,0,0\\Rz:=45)",
+                                  "Offs( RelTool( p1 , 0, 0, -20 ) , 0, 0, nLift )"])
+def test_a_call_of_a_name_or_of_such_a_call_is_read_by_one_pattern(text):
+    fast = fastpath._named_call(text, 7)
+    general = fastpath._value_node(text, 7)
+    assert fast is not None and shape(fast) == shape(general) and fast.tail is general.tail
+    assert shape(fast.args) == shape(general.args)
+    assert fastpath._named_call("Offs(Offs(Offs(p1,0,0,1),0,0,1),0,0,1)", 7) is None
 
 
 # ------------------------------------------------ IF blocks of calls inside a run

@@ -92,7 +92,8 @@ def _plain_value(draw) -> str:
     if kind == "aggregate":
         return draw(st.sampled_from(_AGGREGATES))
     numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
-    head = draw(st.sampled_from(_NAMES + _AGGREGATES))  # a name, or an inline target
+    # a name, an inline target, or such a call itself (`RelTool(Offs(p1,0,0,5),0,0,0)`)
+    head = draw(st.sampled_from(_NAMES + _AGGREGATES) | _plain_value())
     text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{head}"
     offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}"])
     for number in numbers:
@@ -144,9 +145,12 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
                       "MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
                       "v100,fine,tool0\\WObj:=wobj1;",
                       "MoveC p1, p2, v100 \\V:=120, z1, tool0;",
+                      "MoveL RelTool(Offs(p7,0,0,10),0,0,0 \\Rz:=45), v100, z1, tool1;",
+                      "MoveL Offs( RelTool(p7, 0, 0, -20), 0, 0, nLift), v100, z1, tool1;",
                       "SetDO doGrip, 1;", "Foo a \\Switch, b \\Opt:=- 2;"]:
         assert re.fullmatch(plain, statement), statement
     assert not re.fullmatch(plain, "MoveL p1, v100, z1, tool0, ;")
     assert re.fullmatch(plain, "MoveL Offs(p1, 0, 0, -nLift), v100, z1, tool0;")
     assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n.z), v100, z1, tool0;")
     assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n*2), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL Offs(Offs(Offs(p1,0,0,1),0,0,1),0,0,1),v1,z1,t;")
