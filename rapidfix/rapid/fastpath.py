@@ -364,12 +364,14 @@ def declaration_pattern(modifiers: bool) -> LazyPattern:
 
 _DECL = declaration_pattern(True)
 # The declaration most programs are made of, `CONST robtarget p1:=[[x,y,z],[...],...];`
-# written without whitespace in its value, with the value's first group and what follows
-# it in groups of their own (LOCAL, TASK, storage, type, name, value, the first group's
-# numbers, the rest): the text `_DECL` and `grouped_value` would take apart.
+# (tight, or spaced as people write it: `[ [x, y, z], [...], ... ]`), with the value's
+# first group and what follows it in groups of their own (LOCAL, TASK, storage, type,
+# name, value, the first group's numbers, the rest): the text `_DECL` and
+# `grouped_value` would take apart.
+_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
 _PLAIN_DECL = LazyPattern(
     _declaration_head(True) + rf":={WS}*"
-    r"(\[\[([-+0-9.eE,]*)\](,\[[-+0-9.eE,]*\](?:,\[[-+0-9.eE,]*\])*\]))"
+    rf"(\[{WS}*\[({_GROUP_CHARS})\]((?:{WS}*,{WS}*\[{_GROUP_CHARS}\])+{WS}*\]))"
     rf"{WS}*;")
 
 
@@ -495,7 +497,7 @@ def _value_node(text: str, start: int) -> s.Expr:
             if _DEEP_START.match(text):
                 return _deep_aggregate(text, start, _RESTS)
             # an inline target: its position read, the rest once per distinct text
-            grouped = grouped_value(text, _RESTS) if text.startswith("[[") else None
+            grouped = grouped_value(text, _RESTS)
             if grouped is not None:
                 _PLAIN_RESTS.keep(text[text.find("]") + 1:], grouped[1:])
                 return s.NumericAggregate(start, end, grouped)
@@ -525,10 +527,13 @@ def _inline_target(text: str, start: int) -> s.NumericAggregate | None:
     their position), or None: then `_value_node` reads it in full."""
     cut = text.find("]")
     items = _PLAIN_RESTS.get(text[cut + 1:])
-    if items is None or not text.startswith("[[") or not _NUMBER_GROUP.fullmatch(text, 2, cut):
+    if items is None:
+        return None
+    first = _group_start(text)
+    if not first or not _NUMBER_GROUP.fullmatch(text, first, cut):
         return None
     try:
-        group = tuple(map(float, text[2:cut].split(",")))
+        group = tuple(map(float, text[first:cut].split(",")))
     except ValueError:  # not numbers after all: read in full, as before
         return None
     return s.NumericAggregate(start, start + len(text), (group, *items))
@@ -1107,6 +1112,16 @@ def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.As
 # The end of an aggregate's first group and the start of the next, with whitespace
 # (`[[x, y, z], [q1, ...], ...]`, as many programs are written by hand)
 _NEXT_GROUP = re.compile(rf"\]{WS}*,{WS}*\[")
+_FIRST_GROUP = re.compile(rf"\[{WS}*\[")
+
+
+def _group_start(text: str) -> int:
+    """Where the numbers of an aggregate's first group start (`[[1,2,3],...]`, or spaced
+    as people write it, `[ [1, 2, 3], ...]`), or 0 when it does not open with a group."""
+    if text.startswith("[["):
+        return 2
+    m = _FIRST_GROUP.match(text)
+    return 0 if m is None else m.end()
 
 
 def grouped_value(value: str, rests: Memo) -> tuple | None:
@@ -1114,9 +1129,11 @@ def grouped_value(value: str, rests: Memo) -> tuple | None:
     of numbers: that group read every time (a position seldom recurs, so it is not
     kept), what follows it once per distinct text (`rests`). None for any other shape;
     NotFast where the loose pattern let arithmetic by (`[[1-1,2],[3]]`)."""
+    start = _group_start(value)
     cut = value.find("]")
-    group = value[2:cut]
-    if "[" in group or not (value.startswith("],[", cut) or _NEXT_GROUP.match(value, cut)):
+    group = value[start:cut]
+    if not start or "[" in group or not (value.startswith("],[", cut)
+                                         or _NEXT_GROUP.match(value, cut)):
         return None
     rest = value[cut + 1:]
     items = rests.get(rest)
@@ -1200,7 +1217,7 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
                 at = base + m.start(7)
                 # two levels, or three (an array's items), of numbers only (an aggregate
                 # of sums, `[[x+1,...],...]`, is fast_expressions' to read)
-                if value.startswith("[[") and _PLAIN_AGGREGATE.fullmatch(value):
+                if _group_start(value) and _PLAIN_AGGREGATE.fullmatch(value):
                     try:
                         grouped = grouped_value(value, rests)
                     except NotFast:  # arithmetic the loose pattern let by

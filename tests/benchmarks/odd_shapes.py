@@ -81,7 +81,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
-              "routine_targets", "nested_calls")
+              "routine_targets", "nested_calls", "spaced_brackets")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -577,6 +577,20 @@ def _nested_calls(n: int) -> list[str]:
     return [*_head("NestedCalls"), *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _spaced_brackets(n: int) -> list[str]:
+    """Targets spaced inside their brackets too, as some people and generators write
+    them (`[ [x, y, z], [q1, q2, q3, q4], ... ]`): declared for half the moves, inline in
+    the others."""
+    trans, confs = _targets(n)
+    targets = ["[ " + _robtarget(trans[k], confs[k])[1:-1].replace(",", ", ").replace(
+        "[", "[ ").replace("]", " ]") + " ]" for k in range(n)]
+    half = n // 2
+    decls = [f"  CONST robtarget p{k} := {targets[k]};" for k in range(half)]
+    moves = [f"    MoveL {f'p{k}' if k < half else targets[k]}, v100, z1, tMill\\WObj:=wPlate;"
+             for k in range(n)]
+    return [*_head("SpacedBrackets"), *decls, *_parts(moves), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -591,7 +605,7 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool,
              "lower": _lower, "upper": _upper, "exponent": _exponent, "data_last": _data_last,
              "elements": _elements, "routine_targets": _routine_targets,
-             "nested_calls": _nested_calls}
+             "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

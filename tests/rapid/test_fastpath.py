@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from lark.exceptions import UnexpectedInput
 
 from rapidfix.exceptions import RapidSyntaxError
-from rapidfix.rapid import parse_program
+from rapidfix.rapid import fastpath, parse_program
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     TAIL_LIMIT,
@@ -654,7 +654,59 @@ PLAIN_DECLARATIONS = [
     "CONST num a{2}:=[[1,2],[3,4]];",
     "CONST num a:=[[1,2,3]];",
     "CONST num a:=[[[1,2],[3]],[[4],[5]]];",
+    "CONST robtarget p1 := [ [ 1, 2, 3 ], [ 1, 0, 0, 0 ], [ 0, 0, 0, 0 ], [ 9E9, 9E9, 9E9, 9E9, "
+    "9E9, 9E9 ] ];",
+    "CONST robtarget p1:=[\n    [1,2,3],\n    [1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]\n];",
+    "CONST robtarget p1:=[[1 2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
+    "CONST robtarget p1:=[[1,2,3], [1,0, 0 0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
 ]
+
+
+def test_the_common_declaration_form_takes_spaced_targets():
+    plain = fastpath._PLAIN_DECL.compiled
+    for text in PLAIN_DECLARATIONS[:3] + PLAIN_DECLARATIONS[-4:-2]:
+        assert plain.match(text), text
+
+
+# Whitespace as people put it in a target (`[ [500, 0, 400], [1, 0, 0, 0], ...]`): at
+# every junction and around the numbers; in one example of ten, now and then a character
+# the grammar's whitespace has and float() has not (\x1a)
+_TARGET_GAPS = ["", "", "", " ", "  ", "\t", "\n    "]
+
+
+@st.composite
+def spaced_target(draw: st.DrawFn, position: int, gaps: st.SearchStrategy[str]) -> str:
+    """A robtarget aggregate at `position`, spaced anywhere by `gaps`, its first group's
+    last number now and then not one (`1 2`)."""
+    def group(numbers: list[str]) -> str:
+        return "[" + ",".join(f"{draw(gaps)}{n}{draw(gaps)}" for n in numbers) + "]"
+    last = draw(st.sampled_from(["3", "3", "1e2", "+.5", "1 2"]))
+    first = group([f"{position}.5", "-2", last])
+    rest = [group(["1", "0", "0", "0"]), group(["0", "-1", "0", "1"]), group(["9E9"] * 6)]
+    text = f"[{draw(gaps)}{first}"
+    for item in rest:
+        text += f"{draw(gaps)},{draw(gaps)}{item}"
+    return text + f"{draw(gaps)}]"
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.data())
+def test_spaced_targets_declared_and_inline_parse_to_the_plain_tree(data):
+    """Declarations (`_PLAIN_DECL`, `grouped_value`) and inline targets (`_inline_target`
+    after a first one) with whitespace anywhere: the plain grammar's tree, values and
+    all, or its refusal. Several share their text after the first group, as a
+    program's targets do, so the second and later are read from what the first left."""
+    odd = data.draw(st.integers(0, 9)) == 0
+    gaps = st.sampled_from(_TARGET_GAPS + [" \x1a"] * odd)
+    targets = [data.draw(spaced_target(k + 1, gaps)) for k in range(3)]
+    if data.draw(st.booleans()):  # the same spacing after the first group in all three
+        cut = targets[0].index("]")
+        targets = [t[:t.index("]")] + targets[0][cut:] for t in targets]
+    decls = [f"CONST robtarget p{k} :={data.draw(gaps)}{t};" for k, t in enumerate(targets)]
+    moves = [f"MoveL {t}, v100, z1, tool0;" for t in targets]
+    for text in (module(*decls), routine(*moves)):
+        fastpath.forget_texts()
+        assert_parses_as_plain(text)
 
 
 @pytest.mark.parametrize("declaration", PLAIN_DECLARATIONS)
