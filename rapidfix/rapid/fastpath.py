@@ -364,12 +364,17 @@ def declaration_pattern(modifiers: bool) -> LazyPattern:
 
 _DECL = declaration_pattern(True)
 # The declaration most programs are made of, `CONST robtarget p1:=[[x,y,z],[...],...];`
-# (tight, or spaced as people write it: `[ [x, y, z], [...], ... ]`), with the value's
-# first group and what follows it in groups of their own (LOCAL, TASK, storage, type,
-# name, value, the first group's numbers, the rest): the text `_DECL` and
-# `grouped_value` would take apart.
-_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
+# written without whitespace in its value, with the value's first group and what follows
+# it in groups of their own (LOCAL, TASK, storage, type, name, value, the first group's
+# numbers, the rest): the text `_DECL` and `grouped_value` would take apart.
 _PLAIN_DECL = LazyPattern(
+    _declaration_head(True) + rf":={WS}*"
+    r"(\[\[([-+0-9.eE,]*)\](,\[[-+0-9.eE,]*\](?:,\[[-+0-9.eE,]*\])*\]))"
+    rf"{WS}*;")
+# The same spaced as people write it (`[ [x, y, z], [...], ... ]`), the same groups: tried
+# after the tight form, which it would take too, but more slowly.
+_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
+_SPACED_DECL = LazyPattern(
     _declaration_head(True) + rf":={WS}*"
     rf"(\[{WS}*\[({_GROUP_CHARS})\]((?:{WS}*,{WS}*\[{_GROUP_CHARS}\])+{WS}*\]))"
     rf"{WS}*;")
@@ -1189,10 +1194,13 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
     append = decls.append
     rests, storages = _RESTS, _STORAGES
     data_decl, numeric_aggregate, intern = s.DataDecl, s.NumericAggregate, sys.intern
-    plain, general = _PLAIN_DECL.compiled.match, _DECL.compiled.search
+    plain, spaced = _PLAIN_DECL.compiled.match, _SPACED_DECL.compiled.match
+    general = _DECL.compiled.search
     pos, size = 0, len(text)
     while pos < size:
         m = plain(text, pos)
+        if m is None:
+            m = spaced(text, pos)
         if m is not None:  # the common form: its value read here
             local, task, storage, type_name, name, value, group, rest = m.groups()
             items = rests.get(rest)

@@ -663,9 +663,11 @@ PLAIN_DECLARATIONS = [
 
 
 def test_the_common_declaration_form_takes_spaced_targets():
-    plain = fastpath._PLAIN_DECL.compiled
-    for text in PLAIN_DECLARATIONS[:3] + PLAIN_DECLARATIONS[-4:-2]:
-        assert plain.match(text), text
+    plain, spaced = fastpath._PLAIN_DECL.compiled, fastpath._SPACED_DECL.compiled
+    for text in PLAIN_DECLARATIONS[:3]:
+        assert plain.match(text) and spaced.match(text).groups() == plain.match(text).groups()
+    for text in PLAIN_DECLARATIONS[-4:-2]:
+        assert not plain.match(text) and spaced.match(text), text
 
 
 # Whitespace as people put it in a target (`[ [500, 0, 400], [1, 0, 0, 0], ...]`): at
