@@ -134,12 +134,16 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
     # next tried: a function call of a name (or an aggregate of numbers, or such a call
-    # itself) and numbers or names, as most targets moved by Offs or RelTool are
-    # (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p7, 0, 0, 5 \\Rz:=45)`,
+    # itself) and numbers or names (or arithmetic of them), as most targets moved by Offs
+    # or RelTool are (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `Offs(p7,0,0,nLift+5)`,
+    # `RelTool(p7, 0, 0, 5 \\Rz:=45)`,
     # `Offs([[...],...],0,0,5)`, `RelTool(Offs(p7,0,0,10),0,0,0 \\Rz:=45)`): what `term`
     # takes, in one pass (every piece is followed by something that cannot start it
     # again, so there is one way to take each text)
-    offset = rf"(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
+    # an offset: a number or a name, negated or not, or arithmetic of those (`nLift + 5`,
+    # `nDx * 2`): after a term, `-` is an operator, never a sign
+    offset_term = rf"(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
+    offset = rf"{offset_term}(?:{WS}*[-+*\x2f]{WS}*{offset_term})*"
     after_first = (rf"(?:{WS}*,{WS}*{offset})+"
                    rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*{offset})*{WS}*\)")
     first = rf"(?:(?={NAME_START}){value_name}|(?=\[){loose})"

@@ -1053,12 +1053,14 @@ def _head_node(text: str, at: int) -> s.Expr:
     return _value_node(text, at)
 
 
-# A function call of a data name and decimal numbers or names, with optional arguments
-# of those (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `RelTool(p3,0,0,5\Rz:=90)`),
+# A function call of a data name and decimal numbers or names (or arithmetic of them),
+# with optional arguments of those (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`,
+# `Offs(p7,0,0,nLift+5)`, `RelTool(p3,0,0,5\Rz:=90)`),
 # or of such a call and those (`RelTool(Offs(p7,0,0,10),0,0,0\Rz:=90)`): a move's target
 # as most programs write it. (The tail after the first argument is read as `_call_node`
 # reads it: whatever stands there, this only says that the call is of that form.)
-_OFFSET = rf"(?:-{WS}*)?(?:\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?|{NAME})"
+_TERM = rf"(?:-{WS}*)?(?:\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?|{NAME})"
+_OFFSET = rf"{_TERM}(?:{WS}*[-+*/]{WS}*{_TERM})*"
 _AFTER_FIRST = (rf"(?:{WS}*,{WS}*{_OFFSET})+"
                 rf"(?:{WS}*\\{WS}*{NAME}{WS}*:={WS}*{_OFFSET})*{WS}*\)")
 _NAMED_CALL = re.compile(

@@ -445,6 +445,11 @@ NAMED_CALLS = [
     "MoveL Offs(p1, 0, 0, -nLift), v1000, z50, tool0;",
     "MoveL Offs(p1,nDx,- nDy,n1),v1000,z50,tool0;",
     "MoveL Offs(p1,0,0,n.z),v100,z1,tool0;",
+    "MoveL Offs(p1, 0, 0, nLift + 5), v100, z1, tool0;",
+    "MoveL Offs(p1,nDx*2,-nDy/2,1e-5-1),v100,z1,tool0;",
+    "MoveL RelTool(p1,0,0,-nDepth \\Rz:=nTurn*2),v100,z1,tool0;",
+    "MoveL Offs(p1,0,0,n - -1),v100,z1,tool0;",
+    "MoveL Offs(p1,0,0,n MOD 2),v100,z1,tool0;",
     "MoveL Offs(p1,0,0,TRUE),v100,z1,tool0;",
     "MoveL RelTool(p1, 0, 0, -nDepth \\Rz:=nTurn), v100, z1, tool0;",
     "MoveL Offs([[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], 0, 0, 10), v100, "

@@ -262,7 +262,8 @@ _HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "O
 _GAPS = st.sampled_from(["", "", " ", "  ", "\t", "\n  "])
 # an offset: a number, or a name (negated, a component, a keyword, a digit after it)
 _OFFSETS = st.one_of(_NUMBER_TEXTS, st.sampled_from(
-    ["nLift", "-nLift", "- n2", "n.x", "TRUE", "MOD", "nA{2}", "f(1)", "n1e5"]))
+    ["nLift", "-nLift", "- n2", "n.x", "TRUE", "MOD", "nA{2}", "f(1)", "n1e5", "nLift + 5",
+     "n*2", "- n / 2", "1e-5-1", "n MOD 2", "n - -1", "(n+1)"]))
 
 
 @st.composite

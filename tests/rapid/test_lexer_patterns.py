@@ -95,7 +95,9 @@ def _plain_value(draw) -> str:
     # a name, an inline target, or such a call itself (`RelTool(Offs(p1,0,0,5),0,0,0)`)
     head = draw(st.sampled_from(_NAMES + _AGGREGATES) | _plain_value())
     text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{head}"
-    offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}"])
+    offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}", "nLift + 5",
+                                                    "n*2", "-n / 2", "n -2", "1e-5-1",
+                                                    "n MOD 2", "n + -1", "n +"])
     for number in numbers:
         text += f"{draw(_SPACE)},{draw(_SPACE)}{number}"
     for _ in range(draw(st.integers(0, 2))):  # names among them
@@ -152,5 +154,8 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
     assert not re.fullmatch(plain, "MoveL p1, v100, z1, tool0, ;")
     assert re.fullmatch(plain, "MoveL Offs(p1, 0, 0, -nLift), v100, z1, tool0;")
     assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n.z), v100, z1, tool0;")
-    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n*2), v100, z1, tool0;")
+    assert re.fullmatch(plain, "MoveL Offs(p1,0,0,n*2), v100, z1, tool0;")
+    assert re.fullmatch(plain, "MoveL Offs(p1, nDx * 2, 0, nLift + 5), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n MOD 2), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,(n+1)*2), v100, z1, tool0;")
     assert not re.fullmatch(plain, "MoveL Offs(Offs(Offs(p1,0,0,1),0,0,1),0,0,1),v1,z1,t;")
