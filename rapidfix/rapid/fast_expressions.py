@@ -141,9 +141,12 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # takes, in one pass (every piece is followed by something that cannot start it
     # again, so there is one way to take each text)
     # an offset: a number or a name, negated or not, or arithmetic of those (`nLift + 5`,
-    # `nDx * 2`): after a term, `-` is an operator, never a sign
-    offset_term = rf"(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
-    offset = rf"{offset_term}(?:{WS}*[-+*\x2f]{WS}*{offset_term})*"
+    # `nDx * 2`), each term followed by an operator and the start of the next (after a
+    # term, `-` is an operator, never a sign) or by what ends the offset (the term
+    # written once: these patterns are compiled in every process that parses)
+    offset = (rf"(?:(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
+              rf"(?:{WS}*[-+*\x2f]{WS}*(?=[-.0-9A-Za-z{LATIN1_LETTERS}])"
+              rf"|(?={WS}*[,)\\])))+")
     after_first = (rf"(?:{WS}*,{WS}*{offset})+"
                    rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*{offset})*{WS}*\)")
     first = rf"(?:(?={NAME_START}){value_name}|(?=\[){loose})"
@@ -188,8 +191,11 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # text (every alternative starts with a character of its own), and takes a plain
     # argument list in about two thirds of the general pattern's time.
     plain = rf"(?:{quick}|{named_call}|(?=\[){loose})"
-    optional = rf"\\{WS}*{plain_name}(?:{WS}*:={WS}*{plain})?"
-    plain_arguments = rf"{plain}(?:{WS}*,{WS}*(?:{plain}|{optional})|{WS}*{optional})*"
+    # after the first: a plain value, an optional argument of one (`\V:=120`) or a switch
+    # (`\Conc`), after a comma, or without one before a `\` (`plain` written twice only)
+    item = (rf"(?:(?:\\{WS}*{plain_name}{WS}*:={WS}*)?{plain}"
+            rf"|\\{WS}*{plain_name}(?!{WS}*:=))")
+    plain_arguments = rf"{plain}(?:(?:{WS}*,{WS}*|{WS}*(?=\\)){item})*"
     condition = condition_pattern(plain_name)
     return {"value": value, "arguments": arguments, "selectors": postfix(simple),
             "condition": condition, "plain_arguments": plain_arguments}
