@@ -60,6 +60,10 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 - scoped:      a system module (`MODULE m(SYSMODULE, NOSTEPIN)`) of LOCAL, TASK PERS and
                VAR targets, LOCAL routines, moves with `\\TLoad` (some with `load0`, the
                tool's own load) and GripLoad between them
+- nested_calls: targets moved by a call of a call, `RelTool(Offs(p, 0, 0, 5), 0, 0, 0
+               \\Rz:=30)` or `Offs(RelTool(...), ...)`, tight or spaced
+- spaced_brackets: targets spaced inside their brackets (`[ [x, y, z], [ ... ], ... ]`),
+               declared for half the moves, inline in the others
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
