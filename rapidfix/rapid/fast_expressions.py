@@ -134,16 +134,16 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # a string as a whole value (elsewhere it is an operand)
     string = rf"{STRING}(?={WS}*[,;\\])"
     # next tried: a function call of a name (or an aggregate of numbers, or such a call
-    # itself) and numbers or names (or arithmetic of them), as most targets moved by Offs
-    # or RelTool are (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `Offs(p7,0,0,nLift+5)`,
-    # `RelTool(p7, 0, 0, 5 \\Rz:=45)`,
-    # `Offs([[...],...],0,0,5)`, `RelTool(Offs(p7,0,0,10),0,0,0 \\Rz:=45)`): what `term`
-    # takes, in one pass (every piece is followed by something that cannot start it
-    # again, so there is one way to take each text)
-    # an offset: a number or a name, negated or not, or arithmetic of those (`nLift + 5`,
-    # `nDx * 2`), each term followed by an operator and the start of the next (after a
-    # term, `-` is an operator, never a sign) or by what ends the offset (the term
-    # written once: these patterns are compiled in every process that parses)
+    # itself) and offsets, as most targets moved by Offs or RelTool are
+    # (`Offs(p7,0,0,-10)`, `Offs(p7, 0, 0, -nLift)`, `Offs(p7,0,0,nLift+5)`,
+    # `RelTool(p7, 0, 0, 5 \\Rz:=45)`, `Offs([[...],...],0,0,5)`,
+    # `RelTool(Offs(p7,0,0,10),0,0,0 \\Rz:=45)`): what `term` takes, in one pass (every
+    # piece is followed by something that cannot start it again, so there is one way to
+    # take each text).
+    # An offset is a number or a name, negated or not, or arithmetic of those (`nLift + 5`,
+    # `nDx * 2`): each term followed by an operator and the start of the next (after a
+    # term, `-` is an operator, never a sign) or by what ends the offset. The term is
+    # written once: these patterns are compiled in every process that parses.
     offset = (rf"(?:(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
               rf"(?:{WS}*[-+*\x2f]{WS}*(?=[-.0-9A-Za-z{LATIN1_LETTERS}])"
               rf"|(?={WS}*[,)\\])))+")
