@@ -694,7 +694,7 @@ def spaced_target(draw: st.DrawFn, position: int, gaps: st.SearchStrategy[str]) 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_spaced_targets_declared_and_inline_parse_to_the_plain_tree(data):
-    """Declarations (`_PLAIN_DECL`, `grouped_value`) and inline targets (`_inline_target`
+    """Declarations (`_SPACED_DECL`, `grouped_value`) and inline targets (`_inline_target`
     after a first one) with whitespace anywhere: the plain grammar's tree, values and
     all, or its refusal. Several share their text after the first group, as a
     program's targets do, so the second and later are read from what the first left."""

@@ -260,7 +260,8 @@ _HEAD_NAMES = st.sampled_from(["p1", "pHome_2", "TRUE", "false", "Año", "x", "O
 
 
 _GAPS = st.sampled_from(["", "", " ", "  ", "\t", "\n  "])
-# an offset: a number, or a name (negated, a component, a keyword, a digit after it)
+# an offset: a number, or a name (negated, a component, a keyword, a digit after it), or
+# arithmetic of those (an operator the one-pattern route does not take, a parenthesis)
 _OFFSETS = st.one_of(_NUMBER_TEXTS, st.sampled_from(
     ["nLift", "-nLift", "- n2", "n.x", "TRUE", "MOD", "nA{2}", "f(1)", "n1e5", "nLift + 5",
      "n*2", "- n / 2", "1e-5-1", "n MOD 2", "n - -1", "(n+1)"]))
@@ -306,7 +307,8 @@ def test_a_call_of_a_name_and_numbers_reads_as_the_general_reader_and_the_gramma
 
 @pytest.mark.parametrize("text", ["Offs(p1,0,0,-10)", "RelTool(p1, 0, 0, -nDepth \\Rz:=45)",
                                   "RelTool(Offs(p1,0,0,10),0,0,0\\Rz:=45)",
-                                  "Offs( RelTool( p1 , 0, 0, -20 ) , 0, 0, nLift )"])
+                                  "Offs( RelTool( p1 , 0, 0, -20 ) , 0, 0, nLift )",
+                                  "Offs(p1, nDx * 2, 0, nLift + 5 - -1)"])
 def test_a_call_of_a_name_or_of_such_a_call_is_read_by_one_pattern(text):
     fast = fastpath._named_call(text, 7)
     general = fastpath._value_node(text, 7)
