@@ -104,8 +104,8 @@ _WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 # characters, commas and whitespace (`[[600, 0, 650], [1, 0, 0, 0], ...]`) are taken
 # whole (one step of the regex engine, not one per character); as they hold no bracket,
 # this never backtracks.
-_LOOSE_AGGREGATE = (r"\[[-+0-9.eE, \t\f\v\r\n\x1a]*(?:\[[-+0-9.eE, \t\f\v\r\n\x1a]*\]"
-                    r"[-+0-9.eE, \t\f\v\r\n\x1a]*)*\]")
+_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
+_LOOSE_AGGREGATE = rf"\[{_GROUP_CHARS}(?:\[{_GROUP_CHARS}\]{_GROUP_CHARS})*\]"
 # An aggregate of such aggregates, three levels deep, each item two levels deep (an
 # array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
 _ITEM = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)+\]"
@@ -373,7 +373,6 @@ _PLAIN_DECL = LazyPattern(
     rf"{WS}*;")
 # The same spaced as people write it (`[ [x, y, z], [...], ... ]`), the same groups: tried
 # after the tight form, which it would take too, but more slowly.
-_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
 _SPACED_DECL = LazyPattern(
     _declaration_head(True) + rf":={WS}*"
     rf"(\[{WS}*\[({_GROUP_CHARS})\]((?:{WS}*,{WS}*\[{_GROUP_CHARS}\])+{WS}*\]))"
@@ -468,13 +467,18 @@ def _call_node(text: str, start: int) -> s.Call:
         node = _value_node(value, start + first.start(4))
         head = s.Argument(node.start, node.end, "required", None, node)
         tail_at = first.end()
-    tail_text = text[tail_at:]
-    tail = _INNER_TAILS.get(tail_text)
+    return s.LazyFunctionCall(start, start + len(text), sys.intern(name), head,
+                              _inner_tail(text[tail_at:]), start + tail_at)
+
+
+def _inner_tail(text: str) -> CallTail:
+    """The CallTail of a function call's arguments after its first, read once per
+    distinct text."""
+    tail = _INNER_TAILS.get(text)
     if tail is None:
-        tail = CallTail(tail_text, _INNER_PIECE)
-        _INNER_TAILS.keep(tail_text, tail)
-    return s.LazyFunctionCall(start, start + len(text), sys.intern(name), head, tail,
-                              start + tail_at)
+        tail = CallTail(text, _INNER_PIECE)
+        _INNER_TAILS.keep(text, tail)
+    return tail
 
 
 _BOOLS = {"TRUE": True, "FALSE": False}
@@ -523,7 +527,7 @@ def _value_node(text: str, start: int) -> s.Expr:
 
 
 _WHOLE_STRING = re.compile(STRING)
-_NUMBER_GROUP = re.compile(r"[-+0-9.eE, \t\f\v\r\n\x1a]*")
+_NUMBER_GROUP = re.compile(_GROUP_CHARS)
 
 
 def _inline_target(text: str, start: int) -> s.NumericAggregate | None:
@@ -1091,15 +1095,11 @@ def _named_call(text: str, start: int) -> s.LazyFunctionCall | None:
 
 def _lazy_call(name: str, first: s.Expr, tail_text: str, start: int, tail_at: int,
                end: int) -> s.LazyFunctionCall:
-    """The LazyFunctionCall `name(first<tail_text>` from `start` to `end`, its tail (read
-    once per distinct text) at `tail_at`."""
-    tail = _INNER_TAILS.get(tail_text)
-    if tail is None:
-        tail = CallTail(tail_text, _INNER_PIECE)
-        _INNER_TAILS.keep(tail_text, tail)
+    """The LazyFunctionCall `name(first<tail_text>` from `start` to `end`, its tail at
+    `tail_at`."""
     return s.LazyFunctionCall(start, end, sys.intern(name),
                               s.Argument(first.start, first.end, "required", None, first),
-                              tail, tail_at)
+                              _inner_tail(tail_text), tail_at)
 
 
 def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.Assignment:
@@ -1137,10 +1137,11 @@ def grouped_value(value: str, rests: Memo) -> tuple | None:
     kept), what follows it once per distinct text (`rests`). None for any other shape;
     NotFast where the loose pattern let arithmetic by (`[[1-1,2],[3]]`)."""
     start = _group_start(value)
+    if not start:
+        return None
     cut = value.find("]")
     group = value[start:cut]
-    if not start or "[" in group or not (value.startswith("],[", cut)
-                                         or _NEXT_GROUP.match(value, cut)):
+    if "[" in group or not (value.startswith("],[", cut) or _NEXT_GROUP.match(value, cut)):
         return None
     rest = value[cut + 1:]
     items = rests.get(rest)
