@@ -20,6 +20,7 @@ raises ModelError naming the joint, the angle and the range.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -28,6 +29,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from rapidfix.compiled import Switch, load_kernel, numpy_only
+from rapidfix.error_model import rbf_tables
 from rapidfix.error_model.context import Context
 from rapidfix.error_model.effect import Effect
 from rapidfix.exceptions import ModelError
@@ -46,8 +48,8 @@ _EDGE_TOL = 1e-12
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
-#: batches from this size on read the sums from a table (`rbf_compiled.sum_tables`: about
-#: a millisecond to make per network, a few ns an angle after): a large program's
+#: batches from this size on read the sums from a table (`rbf_tables`: a millisecond
+#: (compiled) or a few (numpy) to make per network, a few ns an angle after): a large program's
 #: chunks (`chunks.COMPENSATE`, `chunks.PREDICT`), not a small program's few targets
 _TABLE_FROM = 2048
 #: a network wider than this many nodes keeps its sums (no valid model comes near)
@@ -57,10 +59,11 @@ _COMPILED = Switch("rapidfix_rbf_compiled")
 
 def compiled_sums() -> AbstractContextManager[None]:
     """Inside the block, networks evaluate their Gaussian sums with the compiled kernel
-    when numba is installed (`rbf_compiled`: the same sums to rounding, several times
-    faster). The post-processor turns it on: what it writes is rounded far above that
-    level. Outside, the sums are numpy's, so a fitted or diagnosed model file is the
-    same bytes with or without numba."""
+    when numba is installed (`rbf_compiled`), and a large batch's from a table of
+    quintics (`rbf_tables`, read by numpy where numba is not installed): the same sums
+    to rounding, several times faster. The post-processor turns it on: what it writes
+    is rounded far above that level. Outside, the sums are numpy's, so a fitted or
+    diagnosed model file is the same bytes with or without numba."""
     return _COMPILED.on()
 
 
@@ -69,21 +72,6 @@ def _kernel() -> ModuleType | None:
     RAPIDFIX_IK_BACKEND=numpy (the environment variable that keeps the IK in numpy
     keeps these sums there too)."""
     return None if numpy_only() else load_kernel("rapidfix.error_model.rbf_compiled")
-
-
-def quintic_pieces(value: np.ndarray, slope: np.ndarray, curvature: np.ndarray,
-                   h: float) -> np.ndarray:
-    """(n−1, 6) coefficients c of the quintic c₀ + c₁t + … + c₅t⁵ on each interval
-    (t = 0…1 over h) matching `value`, `slope` and `curvature` (per unit of x) at both
-    of its nodes: the pieces of a network's table (`rbf_compiled.sum_tables`)."""
-    p0, d0, s0 = value[:-1], h * slope[:-1], h * h * curvature[:-1]
-    p1, d1, s1 = value[1:], h * slope[1:], h * h * curvature[1:]
-    rise = p1 - p0
-    return np.ascontiguousarray(np.stack([
-        p0, d0, 0.5 * s0,
-        10.0 * rise - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1,
-        -15.0 * rise + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1,
-        6.0 * rise - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1], axis=1))
 
 
 class OutsideRangeWarning(UserWarning):
@@ -138,13 +126,14 @@ class RBFNetwork:
         return d
 
     def _compiled_sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray | None:
-        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)) by the compiled kernel,
-        or None without it; a large batch from the network's table (`_table`)."""
+        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)) inside `compiled_sums`: by
+        the compiled kernel, a large batch from the network's table (`_table`), which
+        numpy reads too where numba is not installed; None for numpy's own sums."""
         if x.shape[0] < _COMPILED_FROM or not _COMPILED.get():
             return None
         kernel = _kernel()
         if kernel is None:
-            return None
+            return self._table_sums(x, slope) if x.shape[0] >= _TABLE_FROM else None
         known = self.__dict__.get("_spacing")  # (centres it was made for, copy, even)
         if known is None or known[0] is not self.centres:
             c = np.ascontiguousarray(self.centres, dtype=float)
@@ -153,7 +142,7 @@ class RBFNetwork:
         k = c.shape[0]
         weights = np.ascontiguousarray(self.weights[:k], dtype=float)
         if x.shape[0] >= _TABLE_FROM:
-            table = self._table(kernel, c, weights)
+            table = self._table(kernel.sum_tables, weights)
             if table is not None:
                 lo, inv_h, value, slopes = table
                 out = np.empty((2, x.shape[0]) if slope is None else x.shape[0])
@@ -173,20 +162,51 @@ class RBFNetwork:
                              even, slope, out)
         return out
 
-    def _table(self, kernel: ModuleType, centres: np.ndarray, weights: np.ndarray
-               ) -> tuple[float, float, np.ndarray, np.ndarray] | None:
-        """The network's `rbf_compiled.sum_tables`, made on first use and again whenever
-        its centres, width, range or weights have changed; None for a range too wide."""
+    def _table(self, make: Callable[..., rbf_tables.Table], weights: np.ndarray
+               ) -> rbf_tables.Table | None:
+        """The network's table (`rbf_tables`) as `make` makes it (compiled or numpy), made
+        on first use and again whenever its centres, width, range or weights have
+        changed; None for a range too wide."""
         known = self.__dict__.get("_tables")
-        key = (self.width, self.lo, self.hi)
+        key = (make, self.width, self.lo, self.hi)
         if (known is not None and known[0] is self.centres and known[1] == key
                 and np.array_equal(known[2], weights)):
             return known[3]
-        nodes = (self.hi - self.lo) / self.width * kernel.TABLE_NODES_PER_WIDTH
-        table = (kernel.sum_tables(centres, self.width, weights, self.lo, self.hi)
+        nodes = (self.hi - self.lo) / self.width * rbf_tables.TABLE_NODES_PER_WIDTH
+        table = (make(self.centres, self.width, weights, self.lo, self.hi)
                  if 0.0 < nodes < _TABLE_MAX_NODES else None)
         self.__dict__["_tables"] = (self.centres, key, weights.copy(), table)
         return table
+
+    def _table_sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray | None:
+        """`_compiled_sums` of a large batch from the table in numpy (numba not
+        installed); angles off the table take numpy's own sums."""
+        k = self.centres.shape[0]
+        table = self._table(rbf_tables.sum_tables, self.weights[:k])
+        if table is None:
+            return None
+        lo, inv_h, value, slopes = table
+        which = (value, slopes) if slope is None else (slopes if slope else value,)
+        out = np.empty((len(which), x.shape[0]))
+        for row, pieces in zip(out, which):
+            on, row[:] = rbf_tables.table_sums(x, lo, inv_h, pieces)
+        if not on.all():
+            out[:, ~on] = self._sums(x[~on], slope)
+        return out if slope is None else out[0]
+
+    def _sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray:
+        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)), one exp() a term."""
+        w = self.weights[:self.centres.shape[0]]
+        d = self._scaled_offsets(x)
+        g = np.square(d)
+        g *= -0.5
+        np.exp(g, out=g)
+        sums = g @ w
+        if slope is False:
+            return sums
+        g *= d
+        slopes = g @ w
+        return slopes if slope else np.stack([sums, slopes])
 
     def value(self, x: np.ndarray) -> np.ndarray:
         """Δθ at angles already inside the valid range (`design(x) @ weights`, computed

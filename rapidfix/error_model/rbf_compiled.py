@@ -17,14 +17,9 @@ function; tests compare both routes. Centres that are not evenly spaced to round
 (a hand-edited model) take one exp() per term, in the same compiled pass.
 
 A program of many targets evaluates each network at hundreds of thousands of angles;
-large batches read the network from a table instead (`sum_tables`, `table_sums`). It
-holds the sum and its first three derivatives at nodes σ/`TABLE_NODES_PER_WIDTH` apart
-(each term its own exp()), and between two nodes the quintic that matches the sum and
-its first two derivatives at both (the slope sum likewise, from the derivatives one
-higher). The quintic differs from the sum by at most |f⁽⁶⁾|·(h/2)⁶/720 ≤
-15·Σ|w_k|·(h/2σ)⁶/720, about 3e-18·Σ|w_k| at h = σ/200: below the rounding of the sum
-itself (tests compare both). A quintic costs a few ns an angle, the sum about 2 ns a
-centre.
+large batches read the network from a table instead (`rbf_tables`: its node sums
+made here by `node_sums`, read by `table_sums`). A quintic costs a few ns an angle,
+the sum about 2 ns a centre.
 
 This module imports numba; `joint_rbf` imports it only when numba is installed.
 """
@@ -36,12 +31,11 @@ import math
 import numpy as np
 from numba import njit
 
-from rapidfix.error_model.joint_rbf import quintic_pieces
+from rapidfix.error_model import rbf_tables
+from rapidfix.error_model.rbf_tables import TABLE_NODES_PER_WIDTH, Table
 
 #: centres per run of products between two exact exp() (bounds the rounding they add)
 RESTART = 16
-#: table nodes per Gaussian width (h = σ / this; see the module's docstring)
-TABLE_NODES_PER_WIDTH = 200
 
 
 @njit(cache=True)
@@ -170,22 +164,9 @@ def node_sums(nodes: np.ndarray, centres: np.ndarray, inv_width: float, weights:
 
 
 def sum_tables(centres: np.ndarray, width: float, weights: np.ndarray, lo: float,
-               hi: float) -> tuple[float, float, np.ndarray, np.ndarray]:
-    """(lo, 1/h, the sum's pieces, the slope sum's pieces) over [lo, hi] for
-    `table_sums`: nodes σ/`TABLE_NODES_PER_WIDTH` apart at most, the first at lo and
-    the last at hi."""
-    n = math.ceil((hi - lo) / width * TABLE_NODES_PER_WIDTH) + 1
-    nodes = np.linspace(lo, hi, n)
-    h = (hi - lo) / (n - 1)
-    sums = np.empty((4, n))
-    node_sums(nodes, np.ascontiguousarray(centres, dtype=float), 1.0 / width,
-              np.ascontiguousarray(weights, dtype=float), sums)
-    iw = 1.0 / width
-    # the sum's derivatives are S1·(−1/σ), S2/σ², S3·(−1/σ³); the slope sum Σw·g·d is
-    # −σ times the first, so its own derivatives are S2·(−1/σ) and S3/σ²
-    value = quintic_pieces(sums[0], -sums[1] * iw, sums[2] * iw * iw, h)
-    slope = quintic_pieces(sums[1], -sums[2] * iw, sums[3] * iw * iw, h)
-    return lo, 1.0 / h, value, slope
+               hi: float) -> Table:
+    """`rbf_tables.sum_tables` with the node sums compiled: the table for `table_sums`."""
+    return rbf_tables.sum_tables(centres, width, weights, lo, hi, node_sums)
 
 
 @njit(cache=True)

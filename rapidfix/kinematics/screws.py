@@ -14,6 +14,7 @@ import numpy as np
 
 from rapidfix import chunks
 from rapidfix.compiled import Switch, load_kernel, numpy_only
+from rapidfix.kinematics import fk_columns
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
@@ -22,9 +23,10 @@ _COMPILED = Switch("rapidfix_fk_compiled")
 
 def compiled_forward() -> AbstractContextManager[None]:
     """Inside the block, `forward_pose` runs the compiled kernel (`fk_compiled`) when numba
-    is installed: the same poses to rounding, several times faster. The post-processor
-    turns it on (what it writes is rounded far above that level); outside, the poses are
-    numpy's, so a fit or a diagnosis gives the same numbers with or without numba."""
+    is installed, and its arithmetic in numpy columns (`fk_columns`) when it is not: the
+    same poses to rounding, several times faster. The post-processor turns it on (what
+    it writes is rounded far above that level); outside, the poses are the 4×4 products,
+    so a fit or a diagnosis gives the same numbers with or without numba."""
     return _COMPILED.on()
 
 
@@ -125,12 +127,16 @@ def forward_pose(
     q = np.asarray(q, dtype=float)
     count = q.shape[0]
     out = np.empty((count, 4, 4))
-    kernel = _kernel() if count >= _COMPILED_FROM and _COMPILED.get() else None
-    if kernel is not None and q.ndim == 2 and np.ndim(axis_dirs) == 2:
-        kernel.forward_poses(np.ascontiguousarray(axis_dirs, dtype=float),
-                             np.ascontiguousarray(axis_points, dtype=float),
-                             np.ascontiguousarray(home, dtype=float),
-                             np.ascontiguousarray(q), out)
+    if count >= _COMPILED_FROM and _COMPILED.get() and q.ndim == 2 \
+            and np.ndim(axis_dirs) == 2:
+        kernel = _kernel()
+        if kernel is None:
+            fk_columns.forward_poses(axis_dirs, axis_points, home, q, out)
+        else:
+            kernel.forward_poses(np.ascontiguousarray(axis_dirs, dtype=float),
+                                 np.ascontiguousarray(axis_points, dtype=float),
+                                 np.ascontiguousarray(home, dtype=float),
+                                 np.ascontiguousarray(q), out)
         return out
     for start in range(0, count, chunks.FK):
         rows = slice(start, start + chunks.FK)

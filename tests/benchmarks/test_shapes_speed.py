@@ -11,9 +11,10 @@ For each shape of tests/benchmarks/program_shapes.py, in one process:
   per second of CPU time and their ratio (targets: >= 60,000 lines/s and >= 8x);
 - rewrite: `rapidfix rewrite` as a fresh process (start-up and imports
   included), lines per second of the child's CPU time and wall time (target:
-  >= 30,000 lines/s), the time per step of `rewrite_file` in this process, and the
-  same in a fresh process with start-up, imports, system time and page faults
-  (process_phases.py);
+  >= 30,000 lines/s), with numpy's kernels (what `pip install .` runs) and, where
+  numba is installed, with the compiled ones too; the time per step of
+  `rewrite_file` in this process, and the same in a fresh process with start-up,
+  imports, system time and page faults (process_phases.py);
 - start-up: `rapidfix --help` and `rapidfix check` of a small file (target < 0.3 s).
 
 Only correctness is asserted, never time.
@@ -22,6 +23,7 @@ Only correctness is asserted, never time.
 from __future__ import annotations
 
 import gc
+import importlib.util
 import os
 import resource
 import subprocess
@@ -39,6 +41,7 @@ from process_phases import time_steps
 from program_shapes import SHAPES, shape_program
 
 from rapidfix import pipeline
+from rapidfix.compiled import BACKEND_ENV
 from rapidfix.error_model.model_file import save_model
 from rapidfix.rapid import parse_program
 from rapidfix.rapid.grammar import grammar_text
@@ -120,35 +123,52 @@ def _user_env() -> dict[str, str]:
     return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
-def _run_cli(*args: str) -> tuple[float, float, subprocess.CompletedProcess]:
-    """(child CPU seconds, wall seconds, result) of `rapidfix ARGS` in a fresh process."""
+def _run_cli(*args: str, env: dict[str, str] | None = None
+             ) -> tuple[float, float, subprocess.CompletedProcess]:
+    """(child CPU seconds, wall seconds, result) of `rapidfix ARGS` in a fresh process,
+    with `env` added to the user's environment."""
     subprocess.run([sys.executable, "-c", "import rapidfix.cli"], env=_user_env(), check=True)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "rapidfix.cli", *args],
-                          capture_output=True, text=True, env=_user_env())
+                          capture_output=True, text=True, env={**_user_env(), **(env or {})})
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return cpu, wall, done
 
 
+def _routes() -> list[tuple[str, dict[str, str]]]:
+    """The kernels a user's install runs: numpy alone (`pip install .`), and the compiled
+    ones too where numba is installed here (`pip install ".[fast]"`)."""
+    routes = [("numpy", {BACKEND_ENV: "numpy"})]
+    if importlib.util.find_spec("numba") is not None:
+        routes.append(("numba", {BACKEND_ENV: "auto"}))
+    return routes
+
+
 def test_rewrite_matrix(model_path, tmp_path):
     rows = []
+    routes = _routes()
     for shape in ONLY:
         source = tmp_path / f"{shape}{_suffix(shape)}"
         source.write_bytes(any_program(shape, LINES).encode())
         lines = source.read_bytes().count(b"\n")
         out = tmp_path / f"{shape}.out{_suffix(shape)}"
-        cpu, wall, done = _run_cli("rewrite", str(source), "--model", str(model_path),
-                                   "-o", str(out), "--force")
-        assert done.returncode in (0, 3), done.stderr
-        rows.append((shape, lines, lines / cpu, lines / wall, done.returncode))
-    print(f"\nrapidfix rewrite, whole process, {LINES:,} lines per shape")
-    print(f"{'shape':10s} {'lines':>8s} {'lines/s CPU':>12s} {'lines/s wall':>13s} exit")
-    for shape, lines, cpu, wall, code in rows:
-        print(f"{shape:10s} {lines:8,d} {cpu:12,.0f} {wall:13,.0f} {code:4d}")
-    print(f"slowest: {min(r[2] for r in rows):,.0f} lines/s CPU (target 30,000)")
+        for route, env in routes:
+            cpu, wall, done = _run_cli("rewrite", str(source), "--model", str(model_path),
+                                       "-o", str(out), "--force", env=env)
+            assert done.returncode in (0, 3), done.stderr
+            rows.append((shape, route, lines, lines / cpu, lines / wall, done.returncode))
+    print(f"\nrapidfix rewrite, whole process, {LINES:,} lines per shape "
+          "(numpy: the kernels of `pip install .`; numba: of `pip install \".[fast]\"`)")
+    print(f"{'shape':10s} {'kernels':7s} {'lines':>8s} {'lines/s CPU':>12s} "
+          f"{'lines/s wall':>13s} exit")
+    for shape, route, lines, cpu, wall, code in rows:
+        print(f"{shape:10s} {route:7s} {lines:8,d} {cpu:12,.0f} {wall:13,.0f} {code:4d}")
+    for route, _ in routes:
+        slowest = min(r[3] for r in rows if r[1] == route)
+        print(f"slowest ({route}): {slowest:,.0f} lines/s CPU (target 30,000)")
 
 
 _PHASES = (  # (label, module, attribute) of rewrite_source's steps, in order

@@ -117,16 +117,22 @@ def test_too_few_points_is_a_clear_error_and_short_sweeps_still_fit():
         0.01 + 0.002 * np.radians(25.0), abs=1e-5)
 
 
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
 @pytest.mark.parametrize("factor", [0.5, 1.0, 4.0, 13.0])
 @pytest.mark.parametrize("spacing", ["even", "uneven"])
 @pytest.mark.parametrize("batch", ["small", "large"])
-def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing, batch):
+def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing, batch, backend,
+                                                       monkeypatch):
     """Inside `compiled_sums` (the post-processor) the Gaussian sums run compiled when
     numba is installed: products along evenly spaced centres, or one exp per term where
-    the centres are not even, and a large batch from the network's table of quintics.
-    Each way they are the basis matrix times the weights to rounding, for narrow and
-    wide Gaussians, at the ends of the range, at the centres and between."""
+    the centres are not even, and a large batch from the network's table of quintics,
+    which numpy reads where numba is not (RAPIDFIX_IK_BACKEND=numpy). Each way they are
+    the basis matrix times the weights to rounding, for narrow and wide Gaussians, at
+    the ends of the range, at the centres and between."""
+    from rapidfix.compiled import BACKEND_ENV
     from rapidfix.error_model.joint_rbf import _TABLE_FROM, RBFNetwork, compiled_sums
+
+    monkeypatch.setenv(BACKEND_ENV, backend)
 
     rng = np.random.default_rng(7)
     centres = np.linspace(-2.5, 2.8, 120)
@@ -146,6 +152,8 @@ def test_compiled_sums_are_the_basis_times_the_weights(factor, spacing, batch):
     assert np.array_equal(both[0], value) and np.array_equal(both[1], slope)
     # outside the block: numpy's sums, exactly as before
     assert np.array_equal(net.value(x), _numpy_value(net, x))
+    if backend == "numpy":  # a large batch read from the table, a small one summed
+        assert np.array_equal(value, net.value(x)) == (batch == "small")
 
 
 def _numpy_value(net, x):
@@ -192,19 +200,23 @@ def test_value_and_derivative_at_once_are_each_on_its_own(compiled, spacing):
     assert np.any(both[1][~outside[:, 0], 0] != 0.0)
 
 
-def test_the_table_of_a_network_follows_its_weights_and_its_range(monkeypatch):
-    """A large batch reads the sums from a table made for the network as it is (where
-    numba is installed): made once, again for new weights (a model fitted again, or set
-    by a diagnosis) or a new range; angles off the table (outside the range, NaN) take
-    their terms one by one. The numbers are the basis times the weights each time, by
-    whichever route."""
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
+def test_the_table_of_a_network_follows_its_weights_and_its_range(backend, monkeypatch):
+    """A large batch reads the sums from a table made for the network as it is (made by
+    the compiled kernel where numba is installed, by numpy where it is not): made once,
+    again for new weights (a model fitted again, or set by a diagnosis) or a new range;
+    angles off the table (outside the range, NaN) take their terms one by one. The
+    numbers are the basis times the weights each time, by whichever route."""
+    from rapidfix.compiled import BACKEND_ENV
+    from rapidfix.error_model import rbf_tables
     from rapidfix.error_model.joint_rbf import _TABLE_FROM, RBFNetwork, _kernel, compiled_sums
 
+    monkeypatch.setenv(BACKEND_ENV, backend)
     made = []
     kernel = _kernel()
-    if kernel is not None:
-        real = kernel.sum_tables
-        monkeypatch.setattr(kernel, "sum_tables", lambda *a: made.append(a[3:]) or real(*a))
+    owner = rbf_tables if kernel is None else kernel
+    real = owner.sum_tables
+    monkeypatch.setattr(owner, "sum_tables", lambda *a: made.append(a[3:5]) or real(*a))
     rng = np.random.default_rng(3)
     centres = np.linspace(-1.5, 1.2, 40)
     net = RBFNetwork(centres, 2.0 * (centres[1] - centres[0]), -1.5, 1.2, 1e-4)
@@ -223,13 +235,13 @@ def test_the_table_of_a_network_follows_its_weights_and_its_range(monkeypatch):
     np.testing.assert_allclose(value[:-1], net.design(x) @ net.weights, rtol=0,
                                atol=1e-13 * scale)
     assert np.isnan(value[-1])
-    assert made == ([(-1.5, 1.2)] * 2 + [(-1.0, 1.0)] if kernel is not None else [])
+    assert made == [(-1.5, 1.2)] * 2 + [(-1.0, 1.0)]
 
 
 def test_quintic_pieces_are_exact_on_a_quintic():
     """The table's pieces match the value and its first two derivatives at both nodes
     of each interval: a polynomial of degree five is given back to rounding anywhere."""
-    from rapidfix.error_model.joint_rbf import quintic_pieces
+    from rapidfix.error_model.rbf_tables import quintic_pieces
 
     coef = np.array([0.3, -1.2, 0.7, 2.0, -0.9, 0.25])  # c0 + c1 x + ... + c5 x^5
     f = np.polynomial.Polynomial(coef)

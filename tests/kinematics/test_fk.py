@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from rapidfix.kinematics import available_robots, frames, load_robot
 
@@ -182,13 +183,22 @@ def test_fk_with_tool_and_work_object():
     assert np.allclose(T[:3, 3], [815 + 100 - 500, 0, 1186.5 - 100], atol=1e-9)
 
 
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
 @pytest.mark.parametrize("name", available_robots())
-def test_compiled_product_of_exponentials_is_numpys_to_rounding(name):
+def test_compiled_product_of_exponentials_is_numpys_to_rounding(name, backend, monkeypatch):
     """Inside `compiled_forward` (the post-processor) the poses come from the compiled
-    kernel when numba is installed: the numpy poses to rounding, on every shipped robot,
-    over the whole joint range and at the tiny angles where the versine matters."""
+    kernel when numba is installed, and from its arithmetic in numpy columns
+    (`fk_columns`) when it is not (RAPIDFIX_IK_BACKEND=numpy): the 4×4 products to
+    rounding, on every shipped robot, over the whole joint range and at the tiny angles
+    where the versine matters."""
+    from rapidfix.compiled import BACKEND_ENV
+    from rapidfix.kinematics import fk_columns
     from rapidfix.kinematics.screws import compiled_forward
 
+    monkeypatch.setenv(BACKEND_ENV, backend)
+    calls = []
+    real = fk_columns.forward_poses
+    monkeypatch.setattr(fk_columns, "forward_poses", lambda *a: calls.append(1) or real(*a))
     robot = load_robot(name)
     rng = np.random.default_rng(3)
     q = np.concatenate([rng.uniform(-np.pi, np.pi, (3000, 6)),
@@ -200,3 +210,40 @@ def test_compiled_product_of_exponentials_is_numpys_to_rounding(name):
     np.testing.assert_allclose(got[:, :3, 3], expected[:, :3, 3], rtol=0, atol=1e-11)
     assert np.array_equal(got[:, 3], expected[:, 3])
     assert np.array_equal(robot.fk(q), expected)  # outside the block: numpy's as before
+    if backend == "numpy":
+        assert calls  # the columns, not the 4×4 products again
+        assert not np.array_equal(got, expected)  # rounding: another order of the sums
+
+
+def test_columns_product_against_rotations_and_across_chunks():
+    """`fk_columns` against a product of scipy's rotations about each joint's line, on
+    an arm whose axes are not the base axes, and a chunk boundary (`chunks.FK`) changes
+    nothing: each pose is its own sums."""
+    from rapidfix import chunks
+    from rapidfix.kinematics import fk_columns
+
+    rng = np.random.default_rng(5)
+    dirs = rng.normal(size=(6, 3))
+    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+    points = rng.uniform(-800.0, 800.0, (6, 3))
+    home = np.eye(4)
+    home[:3, :3] = Rotation.from_rotvec([0.3, -0.2, 0.9]).as_matrix()
+    home[:3, 3] = [815.0, 12.0, 961.5]
+    q = rng.uniform(-3.0, 3.0, (chunks.FK + 50, 6))
+    whole = np.empty((q.shape[0], 4, 4))
+    fk_columns.forward_poses(dirs, points, home, q, whole)
+    for row in range(0, q.shape[0], 97):
+        expected = np.eye(4)
+        for k in range(6):
+            turn = np.eye(4)
+            turn[:3, :3] = Rotation.from_rotvec(dirs[k] * q[row, k]).as_matrix()
+            turn[:3, 3] = points[k] - turn[:3, :3] @ points[k]
+            expected = expected @ turn
+        expected = expected @ home
+        np.testing.assert_allclose(whole[row, :3, :3], expected[:3, :3], rtol=0, atol=1e-14)
+        np.testing.assert_allclose(whole[row, :3, 3], expected[:3, 3], rtol=0, atol=1e-10)
+        assert np.array_equal(whole[row, 3], [0.0, 0.0, 0.0, 1.0])
+    parts = np.empty_like(whole)
+    fk_columns.forward_poses(dirs, points, home, q[:70], parts[:70])
+    fk_columns.forward_poses(dirs, points, home, q[70:], parts[70:])
+    assert np.array_equal(whole, parts)
