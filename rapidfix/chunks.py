@@ -10,6 +10,8 @@ from __future__ import annotations
 
 #: forward products (screws.py): their (chunk, 4, 4) temporaries stay in the L2 cache
 FK = 2048
+#: forward products in numpy columns (fk_columns.py): about thirty (chunk,) columns alive
+FK_COLUMNS = 4096
 #: `RobotModel.ik_conf` on large batches: IK on the confdata branch, one chunk at a time
 IK_CONF = 8192
 #: closed-form IK with numpy (ik.solve_all): temporaries of a chunk stay in L2/L3

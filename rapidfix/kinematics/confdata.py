@@ -15,10 +15,15 @@ import numpy as np
 
 from rapidfix.compiled import load_kernel, numpy_only
 from rapidfix.exceptions import KinematicsError
+from rapidfix.kinematics import conf_columns
 from rapidfix.kinematics.batches import as_joint_batch
 from rapidfix.kinematics.ik_analytic import wrist_centre
 from rapidfix.kinematics.ik_result import IKSolutions, IKStatus
-from rapidfix.kinematics.screws import forward_is_compiled, product_of_exponentials
+from rapidfix.kinematics.screws import (
+    forward_is_compiled,
+    forward_switched_on,
+    product_of_exponentials,
+)
 
 if TYPE_CHECKING:
     from rapidfix.kinematics.robot_model import RobotModel
@@ -41,17 +46,22 @@ def conf_quantities(model: RobotModel, q: np.ndarray) -> np.ndarray:
     """Signed quantities (..., 6) behind confdata: θ1, θ4, θ6 (rad), wrist centre ahead of
     axis 1 (mm), wrist centre ahead of the lower arm line (mm), θ5 (rad). Inside
     `screws.compiled_forward` the wrist centre's distances come from the compiled kernel
-    (`conf_compiled.wrist_sides_rows`), which `select_by_conf` uses too."""
+    (`conf_compiled.wrist_sides_rows`), which `select_by_conf` uses too, or from its
+    arithmetic in numpy columns (`conf_columns`) where numba is not installed."""
     q = np.asarray(q, dtype=float)
     flat = q.reshape(-1, 6)
     finite = np.all(np.isfinite(flat), axis=1)
     safe = np.where(finite[:, None], flat, 0.0)
     w, r, c0, fwd0, side_sign = _arm_frame(model)
+    switched = flat.shape[0] >= _COMPILED_FROM and forward_switched_on()
     kernel = load_kernel("rapidfix.kinematics.conf_compiled") \
-        if flat.shape[0] >= _COMPILED_FROM and forward_is_compiled() else None
-    if kernel is not None:  # the same quantities to rounding (~1e-13 mm), in one pass
-        sides = np.empty((flat.shape[0], 2))
-        kernel.wrist_sides_rows(safe, w, r, c0, fwd0, side_sign, sides)
+        if switched and forward_is_compiled() else None
+    if switched:  # the same quantities to rounding (~1e-13 mm), in one pass
+        if kernel is None:
+            sides = conf_columns.wrist_sides(safe, w, r, c0, fwd0, side_sign)
+        else:
+            sides = np.empty((flat.shape[0], 2))
+            kernel.wrist_sides_rows(safe, w, r, c0, fwd0, side_sign, sides)
         out = np.stack([safe[:, 0], safe[:, 3], safe[:, 5], sides[:, 0], sides[:, 1],
                         safe[:, 4]], axis=1)
         out[~finite] = np.nan

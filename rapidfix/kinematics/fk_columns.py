@@ -23,12 +23,12 @@ Rows = list[list]
 def forward_poses(axis_dirs: np.ndarray, axis_points: np.ndarray, home: np.ndarray,
                   q: np.ndarray, out: np.ndarray) -> None:
     """out[p] = e^[S1]q[p,0] … e^[Sn]q[p,n-1] · home for every pose p (out (N,4,4)), in
-    chunks of `chunks.FK` poses."""
+    chunks of `chunks.FK_COLUMNS` poses."""
     dirs = np.asarray(axis_dirs, dtype=float).tolist()
     points = np.asarray(axis_points, dtype=float).tolist()
     home = np.asarray(home, dtype=float)
-    for start in range(0, q.shape[0], chunks.FK):
-        rows = slice(start, start + chunks.FK)
+    for start in range(0, q.shape[0], chunks.FK_COLUMNS):
+        rows = slice(start, start + chunks.FK_COLUMNS)
         cur: Rows = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
         for k, (w, r) in enumerate(zip(dirs, points)):
             cur = _times(cur, _exponential(w, r, q[rows, k]))

@@ -36,6 +36,12 @@ def forward_is_compiled() -> bool:
     return _COMPILED.get() and _kernel() is not None
 
 
+def forward_switched_on() -> bool:
+    """Whether the current block asked for the kernels' arithmetic (`compiled_forward`),
+    compiled or in numpy columns."""
+    return _COMPILED.get()
+
+
 def _kernel() -> ModuleType | None:
     """The compiled product of exponentials, or None: numba not installed, or
     RAPIDFIX_IK_BACKEND=numpy (which keeps all the kinematics in numpy)."""
@@ -123,7 +129,7 @@ def forward_pose(
     axis_dirs: np.ndarray, axis_points: np.ndarray, home: np.ndarray, q: np.ndarray
 ) -> np.ndarray:
     """The tool pose (N, 4, 4) of `product_of_exponentials`, without the prefix products
-    (compiled inside `compiled_forward`)."""
+    (the kernel's arithmetic inside `compiled_forward`)."""
     q = np.asarray(q, dtype=float)
     count = q.shape[0]
     out = np.empty((count, 4, 4))

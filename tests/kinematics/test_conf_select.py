@@ -205,22 +205,26 @@ def test_compiled_choice_is_the_numpy_choice(name, variant, seed):
     assert np.array_equal(np.nan_to_num(got_q), np.nan_to_num(want_q))
 
 
+@pytest.mark.parametrize("backend", ["auto", "numpy"])
 @pytest.mark.parametrize("name", available_robots())
-def test_compiled_conf_quantities_are_numpys_to_rounding(name, monkeypatch):
+def test_compiled_conf_quantities_are_numpys_to_rounding(name, backend, monkeypatch):
     """Inside `compiled_forward` the wrist centre's distances behind cfx come from the
-    compiled kernel (where numba is installed): numpy's to rounding (1e-9 mm), the angles
-    the same numbers, a joint vector with a NaN all NaN; the confdata of awkward targets'
-    solutions and of random joints the same."""
-    from rapidfix.compiled import load_kernel
+    compiled kernel where numba is installed, and from its arithmetic in numpy columns
+    (`conf_columns`) where it is not (RAPIDFIX_IK_BACKEND=numpy): the 4×4 products' to
+    rounding (1e-9 mm), the angles the same numbers, a joint vector with a NaN all NaN;
+    the confdata of awkward targets' solutions and of random joints the same."""
+    from rapidfix.compiled import BACKEND_ENV, load_kernel, numpy_only
+    from rapidfix.kinematics import conf_columns
     from rapidfix.kinematics.confdata import conf_quantities, confdata
     from rapidfix.kinematics.screws import compiled_forward
 
+    monkeypatch.setenv(BACKEND_ENV, backend)
     calls = []
-    kernel = load_kernel("rapidfix.kinematics.conf_compiled")
-    if kernel is not None:
-        real = kernel.wrist_sides_rows
-        monkeypatch.setattr(kernel, "wrist_sides_rows",
-                            lambda *args: calls.append(len(args[0])) or real(*args))
+    kernel = None if numpy_only() else load_kernel("rapidfix.kinematics.conf_compiled")
+    owner, name_of = (conf_columns, "wrist_sides") if kernel is None \
+        else (kernel, "wrist_sides_rows")
+    real = getattr(owner, name_of)
+    monkeypatch.setattr(owner, name_of, lambda *args: calls.append(len(args[0])) or real(*args))
     robot = load_robot(name)
     rng = np.random.default_rng(7)
     lo, hi = np.asarray(robot.limits, dtype=float).T
@@ -235,7 +239,7 @@ def test_compiled_conf_quantities_are_numpys_to_rounding(name, monkeypatch):
     with compiled_forward():
         got = conf_quantities(robot, with_nan)
         got_conf = confdata(robot, q)
-    assert calls == ([len(q)] * 2 if accelerated() else [])
+    assert calls == [len(q)] * 2
     assert np.isnan(got[3]).all() and np.isnan(want[3]).all()
     keep = np.ones(len(q), dtype=bool)
     keep[3] = False

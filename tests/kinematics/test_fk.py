@@ -217,8 +217,8 @@ def test_compiled_product_of_exponentials_is_numpys_to_rounding(name, backend, m
 
 def test_columns_product_against_rotations_and_across_chunks():
     """`fk_columns` against a product of scipy's rotations about each joint's line, on
-    an arm whose axes are not the base axes, and a chunk boundary (`chunks.FK`) changes
-    nothing: each pose is its own sums."""
+    an arm whose axes are not the base axes, and a chunk boundary
+    (`chunks.FK_COLUMNS`) changes nothing: each pose is its own sums."""
     from rapidfix import chunks
     from rapidfix.kinematics import fk_columns
 
@@ -229,7 +229,7 @@ def test_columns_product_against_rotations_and_across_chunks():
     home = np.eye(4)
     home[:3, :3] = Rotation.from_rotvec([0.3, -0.2, 0.9]).as_matrix()
     home[:3, 3] = [815.0, 12.0, 961.5]
-    q = rng.uniform(-3.0, 3.0, (chunks.FK + 50, 6))
+    q = rng.uniform(-3.0, 3.0, (chunks.FK_COLUMNS + 50, 6))
     whole = np.empty((q.shape[0], 4, 4))
     fk_columns.forward_poses(dirs, points, home, q, whole)
     for row in range(0, q.shape[0], 97):
