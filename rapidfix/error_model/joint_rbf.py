@@ -48,8 +48,8 @@ _EDGE_TOL = 1e-12
 
 #: batches smaller than this stay in numpy (a kernel call has a fixed cost)
 _COMPILED_FROM = 64
-#: batches from this size on read the sums from a table (`rbf_tables`: a millisecond
-#: (compiled) or a few (numpy) to make per network, a few ns an angle after): a large program's
+#: batches from this size on read the sums from a table (`rbf_tables`: about a
+#: millisecond to make per network, a few ns an angle after): a large program's
 #: chunks (`chunks.COMPENSATE`, `chunks.PREDICT`), not a small program's few targets
 _TABLE_FROM = 2048
 #: a network wider than this many nodes keeps its sums (no valid model comes near)
@@ -195,10 +195,11 @@ class RBFNetwork:
         return out if slope is None else out[0]
 
     def _sums(self, x: np.ndarray, slope: bool | None) -> np.ndarray:
-        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)), one exp() a term."""
+        """Σ w_k g_k (slope: Σ w_k g_k d_k; None: both, (2, M)), one exp() a term, the
+        (M, K) temporaries made in place where they can be."""
         w = self.weights[:self.centres.shape[0]]
         d = self._scaled_offsets(x)
-        g = np.square(d)
+        g = np.square(d, out=d if slope is False else None)
         g *= -0.5
         np.exp(g, out=g)
         sums = g @ w
@@ -210,18 +211,14 @@ class RBFNetwork:
 
     def value(self, x: np.ndarray) -> np.ndarray:
         """Δθ at angles already inside the valid range (`design(x) @ weights`, computed
-        in place: this runs on every target of every program; compiled inside
-        `compiled_sums`, see `rbf_compiled`)."""
+        in place: this runs on every target of every program; compiled or from a table
+        inside `compiled_sums`)."""
         x = np.ravel(np.asarray(x, dtype=float))
         k = self.centres.shape[0]
         sums = self._compiled_sums(x, slope=False)
-        if sums is not None:
-            return sums + self.weights[k] + self.weights[k + 1] * self._u(x)
-        g = self._scaled_offsets(x)
-        np.square(g, out=g)
-        g *= -0.5
-        np.exp(g, out=g)
-        return g @ self.weights[:k] + self.weights[k] + self.weights[k + 1] * self._u(x)
+        if sums is None:
+            sums = self._sums(x, slope=False)
+        return sums + self.weights[k] + self.weights[k + 1] * self._u(x)
 
     def derivative(self, x: np.ndarray) -> np.ndarray:
         """dΔθ/dθ at angles already inside the valid range (`design_derivative(x) @ weights`)."""
@@ -229,14 +226,9 @@ class RBFNetwork:
         k = self.centres.shape[0]
         half = max(0.5 * (self.hi - self.lo), 1e-12)
         sums = self._compiled_sums(x, slope=True)
-        if sums is not None:
-            return -sums / self.width + self.weights[k + 1] / half
-        d = self._scaled_offsets(x)
-        g = np.square(d)
-        g *= -0.5
-        np.exp(g, out=g)
-        g *= d
-        return -(g @ self.weights[:k]) / self.width + self.weights[k + 1] / half
+        if sums is None:
+            sums = self._sums(x, slope=True)
+        return -sums / self.width + self.weights[k + 1] / half
 
     def value_and_derivative(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`value(x)` and `derivative(x)` from one pass over the centres (each the same
@@ -245,18 +237,10 @@ class RBFNetwork:
         k = self.centres.shape[0]
         half = max(0.5 * (self.hi - self.lo), 1e-12)
         both = self._compiled_sums(x, slope=None)
-        if both is not None:
-            sums, slopes = both[0], both[1]
-        else:
-            d = self._scaled_offsets(x)
-            g = np.square(d)
-            g *= -0.5
-            np.exp(g, out=g)
-            sums = g @ self.weights[:k]
-            g *= d
-            slopes = g @ self.weights[:k]
-        value = sums + self.weights[k] + self.weights[k + 1] * self._u(x)
-        return value, -slopes / self.width + self.weights[k + 1] / half
+        if both is None:
+            both = self._sums(x, slope=None)
+        value = both[0] + self.weights[k] + self.weights[k + 1] * self._u(x)
+        return value, -both[1] / self.width + self.weights[k + 1] / half
 
     def to_dict(self) -> dict[str, Any]:
         """JSON data (weights are the effect's parameters and stored there)."""

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rapidfix import chunks
+
 #: a 3-vector as three columns (or floats); a rotation as three rows of them
 Vec = tuple
 Rot = tuple
@@ -22,9 +24,21 @@ Rot = tuple
 def wrist_sides(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: np.ndarray,
                 fwd0: np.ndarray, side_sign: float) -> np.ndarray:
     """(M, 2): the wrist centre ahead of axis 1 and ahead of the lower arm (mm) for
-    joints q (M, 6), as `conf_compiled._wrist_sides` measures them."""
-    w = np.asarray(w, dtype=float).tolist()
-    r = np.asarray(r, dtype=float).tolist()
+    joints q (M, 6), as `conf_compiled._wrist_sides` measures them, in chunks of
+    `chunks.FK_COLUMNS` joint vectors."""
+    out = np.empty((q.shape[0], 2))
+    axes = (np.asarray(w, dtype=float).tolist(), np.asarray(r, dtype=float).tolist(),
+            tuple(np.asarray(c0, dtype=float).tolist()),
+            tuple(np.asarray(fwd0, dtype=float).tolist()))
+    for start in range(0, q.shape[0], chunks.FK_COLUMNS):
+        rows = slice(start, start + chunks.FK_COLUMNS)
+        _sides(q[rows], *axes, side_sign, out[rows])
+    return out
+
+
+def _sides(q: np.ndarray, w: list[list[float]], r: list[list[float]], c0: Vec, fwd0: Vec,
+           side_sign: float, out: np.ndarray) -> None:
+    """`wrist_sides` of one chunk into out."""
     p0, p1, p2 = (tuple(r[i]) for i in range(3))
     rot1 = _turn(w[0], q[:, 0])
     t1 = _sub(p0, _apply(rot1, p0))
@@ -36,16 +50,14 @@ def wrist_sides(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: np.ndarray,
     t12 = _add(_apply(rot1, t2), t1)
     rot123 = _compose(rot12, rot3)
     t123 = _add(_apply(rot12, t3), t12)
-    c = _add(_apply(rot123, tuple(np.asarray(c0, dtype=float).tolist())), t123)
-    out = np.empty((q.shape[0], 2))
-    out[:, 0] = _dot(_sub(c, p0), _apply(rot1, tuple(np.asarray(fwd0, dtype=float).tolist())))
+    c = _add(_apply(rot123, c0), t123)
+    out[:, 0] = _dot(_sub(c, p0), _apply(rot1, fwd0))
     a2 = _add(_apply(rot1, p1), t1)
     a3 = _add(_apply(rot12, p2), t12)
     w2 = _apply(rot1, tuple(w[1]))
     arm = _sub(a3, a2)
     arm_len = np.sqrt(_dot(arm, arm))
     out[:, 1] = _dot(_cross(arm, _sub(c, a2)), w2) / arm_len * side_sign
-    return out
 
 
 def _turn(w: list[float], theta: np.ndarray) -> Rot:

@@ -246,3 +246,21 @@ def test_compiled_conf_quantities_are_numpys_to_rounding(name, backend, monkeypa
     assert np.array_equal(got[keep][:, [0, 1, 2, 5]], want[keep][:, [0, 1, 2, 5]])
     assert np.allclose(got[keep][:, 3:5], want[keep][:, 3:5], rtol=0, atol=1e-9)
     assert np.array_equal(got_conf, confdata(robot, q))
+
+
+def test_columns_wrist_sides_are_the_same_across_chunks():
+    """`conf_columns.wrist_sides` works through `chunks.FK_COLUMNS` rows at a time; each
+    joint vector's sides are its own numbers, wherever a chunk boundary falls."""
+    from rapidfix import chunks
+    from rapidfix.kinematics import conf_columns
+    from rapidfix.kinematics.confdata import _arm_frame
+
+    robot = load_robot("IRB1600-10/1.45")
+    w, r, c0, fwd0, side_sign = _arm_frame(robot)
+    lo, hi = np.asarray(robot.limits, dtype=float).T
+    q = np.random.default_rng(2).uniform(lo, hi, (chunks.FK_COLUMNS + 30, 6))
+    whole = conf_columns.wrist_sides(q, w, r, c0, fwd0, side_sign)
+    parts = np.concatenate([conf_columns.wrist_sides(q[:45], w, r, c0, fwd0, side_sign),
+                            conf_columns.wrist_sides(q[45:], w, r, c0, fwd0, side_sign)])
+    assert np.array_equal(whole, parts)
+    assert np.all(np.isfinite(whole)) and np.ptp(whole[:, 0]) > 100.0
