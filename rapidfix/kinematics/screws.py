@@ -193,10 +193,26 @@ def rotate_vectors(w: np.ndarray, theta: np.ndarray, v: np.ndarray) -> np.ndarra
     """
     w = np.asarray(w, dtype=float)
     theta = np.asarray(theta, dtype=float)
+    if w.ndim == 1:  # one axis (the IK's): its numbers as scalars, v by components
+        return _rotate_about(w.tolist(), theta, np.asarray(v, dtype=float))
     s = np.sin(theta)[..., None]
     half = np.sin(0.5 * theta)[..., None]
     wxv = _cross(w, v)
     return v + s * wxv + (2.0 * half * half) * _cross(w, wxv)
+
+
+def _rotate_about(w: list[float], theta: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """`rotate_vectors` about one axis w: the same products and sums, in the same order,
+    on v's components, so the same numbers without the (..., 3) temporaries."""
+    x, y, z = w
+    s = np.sin(theta)
+    half = np.sin(0.5 * theta)
+    k = 2.0 * half * half
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    a0, a1, a2 = y * v2 - z * v1, z * v0 - x * v2, x * v1 - y * v0
+    b0, b1, b2 = y * a2 - z * a1, z * a0 - x * a2, x * a1 - y * a0
+    return np.stack([v0 + s * a0 + k * b0, v1 + s * a1 + k * b1, v2 + s * a2 + k * b2],
+                    axis=-1)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -48,13 +48,34 @@ def subproblem1(
     w = np.asarray(w, dtype=float)
     u = np.asarray(p, dtype=float) - r
     v = np.asarray(q, dtype=float) - r
+    if tol == np.inf:  # caller knows the points correspond: skip the checks
+        theta = _angle_about(w, u, v) if w.size == 3 else _angle(w, u, v)
+        return theta, np.ones(theta.shape, dtype=bool)
     up, vp = _perp(u, w), _perp(v, w)
     theta = np.arctan2(_dot(w, _cross(up, vp)), _dot(up, vp))
-    if tol == np.inf:  # caller knows the points correspond: skip the checks
-        return theta, np.ones(theta.shape, dtype=bool)
     nu, nv = _norm(up), _norm(vp)
     same = (np.abs(_dot(w, u - v)) <= tol) & (np.abs(nu - nv) <= tol)
     return theta, same & (nu > tol) & (nv > tol)
+
+
+def _angle(w: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Subproblem 1's angle turning u onto v about the unit axes w (from the axis)."""
+    up, vp = _perp(u, w), _perp(v, w)
+    return np.arctan2(_dot(w, _cross(up, vp)), _dot(up, vp))
+
+
+def _angle_about(w: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """`_angle` about one axis: its numbers as scalars, u and v by components, the same
+    products and sums in the same order, without the (..., 3) temporaries."""
+    x, y, z = w.ravel().tolist()
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    du = u0 * x + u1 * y + u2 * z
+    dv = v0 * x + v1 * y + v2 * z
+    a0, a1, a2 = u0 - du * x, u1 - du * y, u2 - du * z
+    b0, b1, b2 = v0 - dv * x, v1 - dv * y, v2 - dv * z
+    cross = x * (a1 * b2 - a2 * b1) + y * (a2 * b0 - a0 * b2) + z * (a0 * b1 - a1 * b0)
+    return np.arctan2(cross, a0 * b0 + a1 * b1 + a2 * b2)
 
 
 def subproblem2(
@@ -71,6 +92,7 @@ def subproblem2(
     along the last axis (the intersection point c = αw1 + βw2 ± γ(w1×w2), + first).
     The axes must not be parallel. When the solutions coincide (γ = 0) both
     columns are equal; when ‖p − r‖ ≠ ‖q − r‖ or γ² < 0 the pose is infeasible.
+    `tol=np.inf` skips that check (all feasible) where the caller already knows.
     """
     w1 = np.asarray(w1, dtype=float)
     w2 = np.asarray(w2, dtype=float)
@@ -87,16 +109,20 @@ def subproblem2(
     # there, which near a wrist singularity costs 1e-8 mm at the flange).
     v_perp = _perp(v, w1)
     g2 = (_dot(v_perp, v_perp) - b * b * (1.0 - k * k)) / cross2
-    scale = np.maximum(_dot(u, u), 1.0)
-    same_norm = np.abs(_norm(u) - _norm(v)) <= tol
-    feasible = (g2 >= -tol * scale) & same_norm
+    if tol == np.inf:  # the caller knows a solution exists: skip the checks
+        feasible = np.ones(g2.shape, dtype=bool)
+    else:
+        scale = np.maximum(_dot(u, u), 1.0)
+        same_norm = np.abs(_norm(u) - _norm(v)) <= tol
+        feasible = (g2 >= -tol * scale) & same_norm
     g = np.sqrt(np.maximum(g2, 0.0))
     base = a[..., None] * w1 + b[..., None] * w2
     sign = np.array([1.0, -1.0])
     c = base[..., None, :] + (g[..., None] * sign)[..., None] * cross[..., None, :]
     origin = np.zeros(3)
-    t2, _ = subproblem1(w2[..., None, :], origin, u[..., None, :], c)
-    t1, _ = subproblem1(w1[..., None, :], origin, c, v[..., None, :])
+    # the angles only: the points correspond by construction
+    t2, _ = subproblem1(w2[..., None, :], origin, u[..., None, :], c, tol=np.inf)
+    t1, _ = subproblem1(w1[..., None, :], origin, c, v[..., None, :], tol=np.inf)
     return t1, t2, feasible
 
 

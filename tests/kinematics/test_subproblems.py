@@ -98,3 +98,48 @@ def test_subproblem3_at_the_edge_of_reach_is_exact():
     got, ok = subproblem3(w, r, np.array([1.0, 0, 0]), np.array([0, 1.5, 0]), np.array(2.5))
     assert ok
     assert angle_diff(got, -np.pi / 2).max() < 1e-12  # fully stretched: one double root
+
+
+def test_one_axis_routes_are_the_general_formulas_bit_for_bit():
+    """Subproblem 1 without its checks and `rotate_vectors` take one axis's numbers as
+    scalars and the vectors by components (the IK's calls): the same products and sums
+    in the same order as the general formulas on (..., 3) arrays, so the same bits, with
+    broadcasting vectors and angles; subproblem 2 without its checks gives the checked
+    call's angles and calls everything feasible."""
+    from rapidfix.kinematics.screws import rotate_vectors
+    from rapidfix.kinematics.subproblems import _angle, _angle_about
+
+    rng = np.random.default_rng(9)
+    w = rng.normal(size=3)
+    w /= np.linalg.norm(w)
+    u = rng.normal(size=(40, 1, 3)) * 300.0
+    v = rng.normal(size=(1, 7, 3)) * 300.0
+    v[0, 0] = u[0, 0]  # a zero angle, and -0.0 components
+    v[0, 1] = -0.0
+    general = _angle(w, u, v)
+    assert general.shape == (40, 7)
+    assert np.array_equal(_angle_about(w, u, v), general)
+    assert np.array_equal(_angle_about(w[None], u, v), _angle(w[None], u, v))
+    theta, ok = subproblem1(w, np.zeros(3), u, v, tol=np.inf)
+    assert np.array_equal(theta, general) and ok.all()
+
+    angles = rng.uniform(-4.0, 4.0, (40, 7))
+    angles[0, :3] = [0.0, -0.0, 1e-12]
+    per_row = np.broadcast_to(w, (40, 7, 3))  # the general route: one axis per vector
+    got = rotate_vectors(w, angles, u)
+    assert got.shape == (40, 7, 3)
+    assert np.array_equal(got, rotate_vectors(per_row, angles, u))
+    np.testing.assert_allclose(np.linalg.norm(got, axis=-1),
+                               np.broadcast_to(np.linalg.norm(u, axis=-1), (40, 7)),
+                               rtol=1e-13)
+
+    w1, w2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    p = np.array([0.0, 0.0, 1.0])
+    q = rng.normal(size=(50, 3))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    t1, t2, ok = subproblem2(w1, w2, np.zeros(3), p, q)
+    s1, s2, all_ok = subproblem2(w1, w2, np.zeros(3), p, q, tol=np.inf)
+    assert np.array_equal(s1, t1) and np.array_equal(s2, t2) and ok.all() and all_ok.all()
+    s1, s2, all_ok = subproblem2(w1, w2, np.zeros(3), p, 2.0 * q, tol=np.inf)
+    assert all_ok.all()  # no check: a point of another norm is not refused
+    assert not subproblem2(w1, w2, np.zeros(3), p, 2.0 * q)[2].any()
