@@ -19,7 +19,8 @@ function; tests compare both routes. Centres that are not evenly spaced to round
 A program of many targets evaluates each network at hundreds of thousands of angles;
 large batches read the network from a table instead (`rbf_tables`: its node sums
 made here by `node_sums`, read by `table_sums`). A quintic costs a few ns an angle,
-the sum about 2 ns a centre.
+the sum about 2 ns a centre. `rbf_tables` makes and reads the table with the same
+sums in numpy, where numba is not installed: a change to either belongs there too.
 
 This module imports numba; `joint_rbf` imports it only when numba is installed.
 """

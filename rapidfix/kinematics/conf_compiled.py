@@ -83,7 +83,8 @@ def _vec(m: np.ndarray, i: int) -> tuple:
 def _wrist_sides(q: np.ndarray, w: np.ndarray, r: np.ndarray, c0: tuple, fwd0: tuple,
                  side_sign: float) -> tuple:
     """(wrist centre ahead of axis 1, ahead of the lower arm) in mm for joints q, as
-    `confdata.conf_quantities` measures them."""
+    `confdata.conf_quantities` measures them. `conf_columns._sides` forms the same sums
+    in numpy columns, where numba is not installed: a change here belongs there too."""
     p0 = _vec(r, 0)
     p1 = _vec(r, 1)
     p2 = _vec(r, 2)

@@ -23,7 +23,9 @@ from numba import njit
 @njit(cache=True)
 def forward_poses(axis_dirs: np.ndarray, axis_points: np.ndarray, home: np.ndarray,
                   q: np.ndarray, out: np.ndarray) -> None:
-    """out[p] = e^[S1]q[p,0] … e^[Sn]q[p,n-1] · home for every pose p (out (N,4,4))."""
+    """out[p] = e^[S1]q[p,0] … e^[Sn]q[p,n-1] · home for every pose p (out (N,4,4)).
+    `fk_columns` forms the same sums in numpy columns, where numba is not installed: a
+    change here belongs there too."""
     n = axis_dirs.shape[0]
     cur = np.empty((3, 4))
     nxt = np.empty((3, 4))
