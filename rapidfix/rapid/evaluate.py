@@ -19,6 +19,8 @@ from rapidfix.rapid.poses import offs, orient_zyx, reltool
 from rapidfix.rapid.values import RECORD_FIELDS, Value, ValueShapeError
 
 TypedValue = tuple[Value, "str | None"]
+#: an argument as its value is read: (kind, name or None, value node or None)
+ArgumentValue = tuple[str, "str | None", "s.Expr | None"]
 Lookup = Callable[[str], TypedValue]
 Function = Callable[[list[Value], dict], TypedValue]
 
@@ -52,6 +54,11 @@ class Evaluator:
         #: arguments hold names (`Offs(p1,0,0,nLift)`), each evaluated once; None (the
         #: default) keeps none, for as long as a name's value may still change
         self.tails: dict[int, tuple] | None = None
+        #: while `tails` is kept: id(expression node of a tail) -> (the node, its value or
+        #: the NotConstant it raised): the pieces tails share (`,tMill.tframe.trans.x*0,`
+        #: among `Offs(p7,tMill.tframe.trans.x*0,p7.trans.x*0,0)` and the next) are read
+        #: once, where the tails themselves differ
+        self._pieces: dict[int, tuple] = {}
 
     def value(self, expr: s.Expr) -> Value:
         """The value of `expr`; raises NotConstant."""
@@ -140,7 +147,8 @@ class Evaluator:
         """The value of a function call; `args` its arguments where they are at hand
         (their values are what counts, not where they stand), else `expr.args`."""
         handler = _handler(expr)
-        required, optional, failure = _read_tail(self, expr.args if args is None else args)
+        required, optional, failure = _read_values(self, [
+            (a.kind, a.name, a.value) for a in (expr.args if args is None else args)])
         if failure is not None:
             raise NotConstant(failure)
         return _apply(expr, handler, list(required), optional)
@@ -151,11 +159,11 @@ class Evaluator:
         head = expr.head
         if head is None or head.value is None:
             return self._call(expr)
-        constants, arguments = _tail_values(expr.tail)
+        constants, values = _tail_values(expr.tail)
         if constants is None:
-            constants = self._scoped_tail(expr.tail, arguments)
+            constants = self._scoped_tail(expr.tail, values)
         if constants is None:  # not all literals: its arguments as read, at offset 0
-            return self._call(expr, [head, *arguments])
+            return self._call(expr, [head, *expr.tail.arguments(0)])
         handler = _handler(expr)
         first = self.value(head.value)  # the first required argument, as _call takes it
         required, optional, failure = constants
@@ -173,9 +181,9 @@ class Evaluator:
 
         A program with a hundred thousand such calls has as many distinct texts: each
         needs its own value, but not the layers of the general route."""
-        constants, arguments = _tail_values(expr.tail)
+        constants, values = _tail_values(expr.tail)
         if constants is None:
-            constants = self._scoped_tail(expr.tail, arguments)
+            constants = self._scoped_tail(expr.tail, values)
         if constants is None:
             return None
         handler = _handler(expr)
@@ -186,27 +194,49 @@ class Evaluator:
             raise NotConstant(failure)
         return _apply(expr, handler, [first, *required], optional)
 
-    def _scoped_tail(self, tail: s.ArgumentTail, arguments: list[s.Argument]
+    def _scoped_tail(self, tail: s.ArgumentTail, values: list[ArgumentValue]
                      ) -> tuple | None:
-        """_tail_values' constants of a shared tail whose arguments hold names, evaluated
-        in this evaluator's scope once while `tails` is kept (else None): its arguments
-        are read in the order `_call` reads them after the first, so a failure gives the
-        reason `_call` gives."""
+        """_tail_values' constants of a shared tail whose arguments hold names (`values`,
+        the tail's), evaluated in this evaluator's scope once while `tails` is kept (else
+        None): its arguments are read in the order `_call` reads them after the first, so
+        a failure gives the reason `_call` gives."""
         kept = self.tails
         if kept is None:
             return None
         known = kept.get(id(tail))
         if known is not None and known[0] is tail:
             return known[1]
-        values = _read_tail(self, arguments)
+        constants = _read_values(self, values, self._piece)
         if len(kept) >= _KEPT_TAILS:
             kept.clear()
-        kept[id(tail)] = (tail, values)
-        return values
+        kept[id(tail)] = (tail, constants)
+        return constants
 
 
-#: the most tails an evaluator keeps (`Evaluator._scoped_tail`)
+    def _piece(self, expr: s.Expr) -> Value:
+        """`value` of a node of a kept tail, once per node (`_pieces`)."""
+        if type(expr) in _LEAVES:
+            return self.value(expr)
+        pieces = self._pieces
+        known = pieces.get(id(expr))
+        if known is None or known[0] is not expr:
+            try:
+                value: Value | NotConstant = self.value(expr)
+            except NotConstant as err:
+                value = NotConstant(err.reason)  # (without its traceback)
+            if len(pieces) >= _KEPT_TAILS:
+                pieces.clear()
+            known = pieces[id(expr)] = (expr, value)
+        value = known[1]
+        if type(value) is NotConstant:
+            raise NotConstant(value.reason)
+        return value
+
+
+#: the most tails, and their pieces, an evaluator keeps (`Evaluator._scoped_tail`)
 _KEPT_TAILS = 4096
+# nodes read at once (a name's value is kept by the lookup)
+_LEAVES = frozenset({s.NameRef, s.Number, s.NumericAggregate, s.String, s.Bool})
 
 
 def _placeholder(evaluator: Evaluator, expr: s.Placeholder) -> TypedValue:
@@ -271,36 +301,39 @@ def _is_constant(expr: s.Expr | None) -> bool:
     return expr is None or type(expr) in _CONSTANT_NODES
 
 
-def _tail_values(tail: s.ArgumentTail) -> tuple[tuple | None, list[s.Argument]]:
-    """(constants, arguments) of a shared tail. constants: (required values, optional
+def _tail_values(tail: s.ArgumentTail) -> tuple[tuple | None, list[ArgumentValue]]:
+    """(constants, values) of a shared tail. constants: (required values, optional
     values, the reason _call would refuse them or None) of a tail of literals, as _call
     reads them after a call's first argument; None when a tail argument holds a name
-    (then evaluated in its scope: `arguments` are the tail's, at offset 0, so that they
-    are not made twice; [] for a tail of literals)."""
+    (then evaluated in its scope: `values` are the tail's `values()`, so that they are
+    not gathered twice; [] for a tail of literals)."""
     cached = _TAIL_VALUES.get(id(tail))
     if cached is not None and cached[0] is tail:
         return cached[1]
-    arguments = tail.arguments(0)
+    values = tail.values()
     result: tuple | None = None
-    if all(_is_constant(a.value) for a in arguments):
-        result = _read_tail(Evaluator(_no_names), arguments)
+    if all(_is_constant(value) for _, _, value in values):
+        result = _read_values(Evaluator(_no_names), values)
     if len(_TAIL_VALUES) >= 4096:
         _TAIL_VALUES.clear()
-    values = (result, [] if result is not None else arguments)
-    _TAIL_VALUES[id(tail)] = (tail, values)
-    return values
+    found = (result, [] if result is not None else values)
+    _TAIL_VALUES[id(tail)] = (tail, found)
+    return found
 
 
-def _read_tail(evaluator: Evaluator, arguments: list[s.Argument]) -> tuple:
+def _read_values(evaluator: Evaluator, arguments: list[ArgumentValue],
+                 read: Callable[[s.Expr], Value] | None = None) -> tuple:
     """(required values, optional values, None) of a call's arguments (or of those after
-    its first), required ones first, then optional ones, then a conditional one refused;
-    or ((), {}, the reason of the first that is not constant)."""
+    its first) as (kind, name, value node) each, required ones first, then optional
+    ones, then a conditional one refused; or ((), {}, the reason of the first that is
+    not constant). `read` gives a node's value (default: evaluator.value)."""
+    value_of = evaluator.value if read is None else read
     try:
-        required = [evaluator.value(a.value) for a in arguments
-                    if a.kind == "required" and a.value is not None]
-        optional = {a.key: (evaluator.value(a.value) if a.value is not None else True)
-                    for a in arguments if a.kind == "optional"}
-        if any(a.kind == "conditional" for a in arguments):
+        required = [value_of(value) for kind, _, value in arguments
+                    if kind == "required" and value is not None]
+        optional = {name.lower(): (value_of(value) if value is not None else True)
+                    for kind, name, value in arguments if kind == "optional"}
+        if any(kind == "conditional" for kind, _, _ in arguments):
             raise NotConstant("conditional argument is decided at run time")
     except NotConstant as err:
         return (), {}, err.reason

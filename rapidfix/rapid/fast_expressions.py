@@ -129,6 +129,13 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     simple = rf"(?:{operand}{follow})+"
     # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
     # most are
+    # (a name with its components and indices of names and numbers: `p7.trans.x`,
+    # `path{3}`)
+    name_ref = rf"{value_name}(?:(?=[.{{]){postfix(leaf)})?"
+    # such a name with at least one component or index, as a whole value (where quick
+    # has refused the name alone)
+    element = (rf"(?={NAME_START}){value_name}(?={WS}*[.{{]){postfix(leaf)}"
+               rf"(?={WS}*[,;)\\])")
     quick = (rf"(?:(?:-{WS}*)?{number}|(?={NAME_START})(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)
@@ -144,14 +151,14 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # `nDx * 2`): each term followed by an operator and the start of the next (after a
     # term, `-` is an operator, never a sign) or by what ends the offset. The term is
     # written once: these patterns are compiled in every process that parses.
-    offset = (rf"(?:(?:-{WS}*)?(?:{number}|(?={NAME_START}){value_name})"
+    offset = (rf"(?:(?:-{WS}*)?(?:{number}|(?={NAME_START}){name_ref})"
               rf"(?:{WS}*[-+*\x2f]{WS}*(?=[-.0-9A-Za-z{LATIN1_LETTERS}])"
               rf"|(?={WS}*[,)\\])))+")
     after_first = (rf"(?:{WS}*,{WS}*{offset})+"
                    rf"(?:{WS}*\\{WS}*{plain_name}{WS}*:={WS}*{offset})*{WS}*\)")
-    first = rf"(?:(?={NAME_START}){value_name}|(?=\[){loose})"
+    first = rf"(?:(?={NAME_START}){name_ref}|(?=\[){loose})"
     named_call = (rf"(?={NAME_START}){value_name}\({WS}*"
-                  rf"(?:(?={NAME_START}){value_name}(?:\({WS}*{first}{after_first})?"
+                  rf"(?:(?={NAME_START}){value_name}(?:\({WS}*{first}{after_first}|{postfix(leaf)})"
                   rf"|(?=\[){loose}){after_first}(?={WS}*[,;\\])")
 
     def argument(value: str) -> str:
@@ -190,7 +197,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # subset of `arguments` that the lexer tries first. It has one way to take each
     # text (every alternative starts with a character of its own), and takes a plain
     # argument list in about two thirds of the general pattern's time.
-    plain = rf"(?:{quick}|{named_call}|(?=\[){loose})"
+    plain = rf"(?:{quick}|{named_call}|(?=\[){loose}|{element})"
     # after the first: a plain value, an optional argument of one (`\V:=120`) or a switch
     # (`\Conc`), after a comma, or without one before a `\` (`plain` written twice only)
     item = (rf"(?:(?:\\{WS}*{plain_name}{WS}*:={WS}*)?{plain}"

@@ -99,12 +99,17 @@ WS = r"[ \t\f\v\r\n\x1a]"
 GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
 # A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
 _WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
+# Whitespace inside an aggregate of numbers: the grammar's NUMERIC_AGGREGATE takes
+# Python's `\s` there, which holds every character of WS but \x1a (a DOS end of file,
+# whitespace between tokens): an aggregate with one inside is the grammar's aggregate of
+# items, which the general route reads.
+_AGGREGATE_WS = r"[ \t\f\v\r\n]"
 # An aggregate of numbers, up to two levels deep, matched loosely for speed; its numbers
 # are checked when they are read (_number_group, aggregate_value). Runs of number
 # characters, commas and whitespace (`[[600, 0, 650], [1, 0, 0, 0], ...]`) are taken
 # whole (one step of the regex engine, not one per character); as they hold no bracket,
 # this never backtracks.
-_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n\x1a]*"
+_GROUP_CHARS = r"[-+0-9.eE, \t\f\v\r\n]*"
 _LOOSE_AGGREGATE = rf"\[{_GROUP_CHARS}(?:\[{_GROUP_CHARS}\]{_GROUP_CHARS})*\]"
 # An aggregate of such aggregates, three levels deep, each item two levels deep (an
 # array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
@@ -375,7 +380,8 @@ _PLAIN_DECL = LazyPattern(
 # after the tight form, which it would take too, but more slowly.
 _SPACED_DECL = LazyPattern(
     _declaration_head(True) + rf":={WS}*"
-    rf"(\[{WS}*\[({_GROUP_CHARS})\]((?:{WS}*,{WS}*\[{_GROUP_CHARS}\])+{WS}*\]))"
+    rf"(\[{_AGGREGATE_WS}*\[({_GROUP_CHARS})\]"
+    rf"((?:{_AGGREGATE_WS}*,{_AGGREGATE_WS}*\[{_GROUP_CHARS}\])+{_AGGREGATE_WS}*\]))"
     rf"{WS}*;")
 
 
@@ -792,19 +798,21 @@ TAIL_LIMIT = 4096
 
 # One argument of a tail, offsets relative to the tail: (kind, start, end,
 # optional name, value node type or None, value start, value end, what the node
-# holds besides its span).
-_TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple]
+# holds besides its span, the value's node as read at some other place or None).
+_TailArgument = tuple[str, int, int, "str | None", Any, int, int, tuple, Any]
 
 
-def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple]:
-    """(node type, start, end, other fields) of the node _value_node makes. Each text is
-    read once: tails that differ (`v100\\V:=120`, `v100\\V:=135`) share their pieces."""
+def _value_entry(text: str, start: int) -> tuple[Any, int, int, tuple, s.Expr]:
+    """(node type, start, end, other fields, the node as read at offset 0) of the node
+    _value_node makes. Each text is read once: tails that differ (`v100\\V:=120`,
+    `v100\\V:=135`) share their pieces."""
     known = _ENTRIES.get(text)
     if known is None:
-        known = _node_entry(_value_node(text, 0), 0)
+        node = _value_node(text, 0)
+        known = (*_node_entry(node, 0), node)
         _ENTRIES.keep(text, known)
-    kind, _, length, fields = known
-    return kind, start, start + length, fields
+    kind, _, length, fields, node = known
+    return kind, start, start + length, fields, node
 
 
 def _node_entry(node: s.Expr, start: int) -> tuple[Any, int, int, tuple]:
@@ -828,11 +836,11 @@ def _tail(text: str, pieces: LazyPattern) -> tuple[_TailArgument, ...]:
     for piece in pieces.finditer(text):
         slash, option, option_value, value, semi = piece.groups()
         if value is not None:
-            node, at, end, fields = _value_entry(value, piece.start(4))
-            entries.append(("required", at, end, None, node, at, end, fields))
+            node, at, end, fields, read = _value_entry(value, piece.start(4))
+            entries.append(("required", at, end, None, node, at, end, fields, read))
         elif slash is not None:
             if option_value is None:
-                entry: tuple = (None, 0, 0, ())
+                entry: tuple = (None, 0, 0, (), None)
             else:
                 entry = _value_entry(option_value, piece.start(3))
             entries.append(("optional", piece.start(1), piece.end(), sys.intern(option), *entry))
@@ -861,8 +869,9 @@ class CallTail:
         rest = CallTail(None)
         rest.entries = tuple(
             (kind, start - cut, end - cut, option, node, value_start - cut, value_end - cut,
-             fields)
-            for kind, start, end, option, node, value_start, value_end, fields in entries[1:])
+             fields, read)
+            for kind, start, end, option, node, value_start, value_end, fields, read
+            in entries[1:])
         return rest
 
     def with_first(self, node: s.Expr, cut: int) -> CallTail:
@@ -872,10 +881,10 @@ class CallTail:
         start = cut - (node.end - node.start)
         kind, at, end, fields = _node_entry(node, start)
         both = CallTail(None)
-        both.entries = (("required", at, end, None, kind, at, end, fields), *(
-            (kind, start + cut, end + cut, option, node, value_start + cut, value_end + cut,
-             fields)
-            for kind, start, end, option, node, value_start, value_end, fields
+        both.entries = (("required", at, end, None, kind, at, end, fields, node), *(
+            (kind, start + cut, end + cut, option, read_node, value_start + cut,
+             value_end + cut, fields, read)
+            for kind, start, end, option, read_node, value_start, value_end, fields, read
             in self.entries))
         return both
 
@@ -884,8 +893,14 @@ class CallTail:
         argument = s.Argument
         return [argument(shift + start, shift + end, kind, option, None if node is None else
                          node(shift + value_start, shift + value_end, *fields))
-                for kind, start, end, option, node, value_start, value_end, fields
+                for kind, start, end, option, node, value_start, value_end, fields, _
                 in self.entries]
+
+    def values(self) -> list[tuple[str, str | None, s.Expr | None]]:
+        """(kind, option name or None, the value's node or None) of each argument, the
+        nodes as they were read at some other place: what a reader of values needs (a
+        value does not depend on where its node stands), without making the nodes."""
+        return [(entry[0], entry[3], entry[8]) for entry in self.entries]
 
 
 # Distinct call tails kept across tokens and files (a CAM program has a few dozen),
@@ -1118,8 +1133,8 @@ def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.As
 
 # The end of an aggregate's first group and the start of the next, with whitespace
 # (`[[x, y, z], [q1, ...], ...]`, as many programs are written by hand)
-_NEXT_GROUP = re.compile(rf"\]{WS}*,{WS}*\[")
-_FIRST_GROUP = re.compile(rf"\[{WS}*\[")
+_NEXT_GROUP = re.compile(rf"\]{_AGGREGATE_WS}*,{_AGGREGATE_WS}*\[")
+_FIRST_GROUP = re.compile(rf"\[{_AGGREGATE_WS}*\[")
 
 
 def _group_start(text: str) -> int:

@@ -186,6 +186,10 @@ class ArgumentTail(Protocol):
     def arguments(self, shift: int) -> list[Argument]:
         """The tail's Argument nodes with offsets moved by `shift`."""
 
+    def values(self) -> list[tuple[str, str | None, Expr | None]]:
+        """(kind, name or None, value node or None) of each argument, the nodes standing
+        anywhere (a value does not depend on where its node stands)."""
+
 
 _CALL_ARGS = ProcedureCall.__dict__["args"]  # the slot, under the property below
 

@@ -711,6 +711,24 @@ def test_spaced_targets_declared_and_inline_parse_to_the_plain_tree(data):
         assert_parses_as_plain(text)
 
 
+@pytest.mark.parametrize("gap", ["\x1a", " \x1a", "\x1a\n  "])
+def test_a_dos_end_of_file_inside_a_target_reads_as_the_grammar_reads_it(gap):
+    """\x1a is the grammar's whitespace between tokens, but not inside its
+    NUMERIC_AGGREGATE (whose `\\s` lacks it): a target with one there is an aggregate
+    of items, also after targets of the same text without it (whose rests are kept)."""
+    plain = "[[1.5,-2,3],[1,0,0,0],[0,-1,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+    odd = [f"[{gap}[3.5,-2,3],[1,0,0,0],[0,-1,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]]",
+           f"[[3.5,-2,3],{gap}[1,0,0,0],[0,-1,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]]",
+           f"[[3.5,-2,3],[1,0,0,0],[0,-1,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]{gap}]"]
+    for target in odd:
+        for text in (module(f"CONST robtarget p0 :={plain};", f"CONST robtarget p1 :={target};"),
+                     routine(f"MoveL {plain}, v100, z1, tool0;",
+                             f"MoveL {target}, v100, z1, tool0;")):
+            fastpath.forget_texts()
+            assert_parses_as_plain(text)
+            assert "'Aggregate'" in repr(shape(parse_text(text)))
+
+
 @pytest.mark.parametrize("declaration", PLAIN_DECLARATIONS)
 def test_declarations_of_the_common_form_parse_to_the_plain_tree(declaration):
     """Each alone, and in a run with the others around it (the plain form read first,

@@ -153,7 +153,15 @@ def test_the_plain_call_pattern_takes_the_usual_moves():
         assert re.fullmatch(plain, statement), statement
     assert not re.fullmatch(plain, "MoveL p1, v100, z1, tool0, ;")
     assert re.fullmatch(plain, "MoveL Offs(p1, 0, 0, -nLift), v100, z1, tool0;")
-    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n.z), v100, z1, tool0;")
+    # names with components and indices of names and numbers, in offsets and as values
+    for statement in ["MoveL Offs(p1,0,0,n.z), v100, z1, tool0;",
+                      "MoveL Offs(p0,tMill.tframe.trans.x*0,p0.trans.x*2,0),v100,z1,t;",
+                      "MoveL path{3}, v100, z1, tool0;", "MoveL grid{i, 2}.trans, v1, z1, t;",
+                      "MoveL Offs(path{3},0,0,nZ{2}),v100,z1,t;",
+                      "MoveL RelTool(Offs(p{1},0,0,1),0,0,0),v100,z1,t;"]:
+        assert re.fullmatch(plain, statement), statement
+    assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n{i+1}), v100, z1, tool0;")
+    assert not re.fullmatch(plain, "MoveL path{i+1}, v100, z1, tool0;")
     assert re.fullmatch(plain, "MoveL Offs(p1,0,0,n*2), v100, z1, tool0;")
     assert re.fullmatch(plain, "MoveL Offs(p1, nDx * 2, 0, nLift + 5), v100, z1, tool0;")
     assert not re.fullmatch(plain, "MoveL Offs(p1,0,0,n MOD 2), v100, z1, tool0;")
