@@ -64,6 +64,11 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                \\Rz:=30)` or `Offs(RelTool(...), ...)`, tight or spaced
 - spaced_brackets: targets spaced inside their brackets (`[ [x, y, z], [ ... ], ... ]`),
                declared for half the moves, inline in the others
+- one_routine: a CAM post that writes every move into one routine, inline targets
+               (no routine ever ends before the file does)
+- inline_data: declared targets whose numbers carry all the digits a double holds
+               (`-149.50012345678901`, `0.2588190451025207`), moves with inline
+               speeddata and zonedata aggregates, `\\T:=` times
 
 `odd_program(shape, lines)` gives about `lines` lines of that shape.
 """
@@ -85,7 +90,8 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "feeds", "tails", "five_axis", "track", "remarks", "spaced", "latin1",
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
-              "routine_targets", "nested_calls", "spaced_brackets")
+              "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
+              "inline_data")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -306,6 +312,25 @@ def _feeds(n: int) -> list[str]:
         f"    MoveL {_robtarget(trans[k], confs[k])},[{20 + k % 97}.5,500,5000,1000],z1,"
         "tMill,\\WObj:=wPlate;" for k in range(n)]
     return [*_head("Feeds"), *_parts(moves, 2000), "ENDMODULE"]
+
+
+def _one_routine(n: int) -> list[str]:
+    trans, confs = _targets(n)
+    moves = [f"    MoveL {_robtarget(trans[k], confs[k])},v100,z1,tMill\\WObj:=wPlate;"
+             for k in range(n)]
+    return [*_head("CamOne"), "  PROC main()", *moves, "  ENDPROC", "ENDMODULE"]
+
+
+def _inline_data(n: int) -> list[str]:
+    digits = [re.sub(r"(-?\d+\.\d{3})(?=[],])", rf"\g<1>{k % 97:02d}345678901",
+                     line.replace("0.258819045", "0.2588190451025207")
+                     .replace("0.965925826", "0.9659258262890683"))
+              for k, line in enumerate(_decls(n))]
+    timed = (" \\T:=0.5", "", "", "")
+    moves = [f"    MoveL p{k}, [{100 + k % 50},500,5000,1000]{timed[k % 4]}, "
+             f"[FALSE,{k % 5 + 1},{1.5 * (k % 5 + 1):g},0.3,0.3,0.03,0.3], tMill"
+             "\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("InlineData"), *digits, *_parts(moves), "ENDMODULE"]
 
 
 def _tails(n: int) -> list[str]:
@@ -609,7 +634,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "scoped": _scoped, "hand_offs": _hand_offs, "reltool": _reltool,
              "lower": _lower, "upper": _upper, "exponent": _exponent, "data_last": _data_last,
              "elements": _elements, "routine_targets": _routine_targets,
-             "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets}
+             "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets,
+             "one_routine": _one_routine, "inline_data": _inline_data}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
