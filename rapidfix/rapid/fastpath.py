@@ -889,12 +889,18 @@ class CallTail:
         return both
 
     def arguments(self, shift: int) -> list[s.Argument]:
-        """The Argument nodes of the tail standing at offset `shift`."""
+        """The Argument nodes of the tail standing at offset `shift`. Where a value ends
+        (and, a required one, starts) with its argument, both nodes hold one int object:
+        a call's offsets are most of the ints of a large program's model."""
         argument = s.Argument
-        return [argument(shift + start, shift + end, kind, option, None if node is None else
-                         node(shift + value_start, shift + value_end, *fields))
-                for kind, start, end, option, node, value_start, value_end, fields, _
-                in self.entries]
+        made: list[s.Argument] = []
+        append = made.append
+        for kind, start, end, option, node, value_start, value_end, fields, _ in self.entries:
+            at, to = shift + start, shift + end
+            append(argument(at, to, kind, option, None if node is None else node(
+                at if value_start == start else shift + value_start,
+                to if value_end == end else shift + value_end, *fields)))
+        return made
 
     def values(self) -> list[tuple[str, str | None, s.Expr | None]]:
         """(kind, option name or None, the value's node or None) of each argument, the
