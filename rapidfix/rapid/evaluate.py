@@ -212,7 +212,6 @@ class Evaluator:
         kept[id(tail)] = (tail, constants)
         return constants
 
-
     def _piece(self, expr: s.Expr) -> Value:
         """`value` of a node of a kept tail, once per node (`_pieces`)."""
         if type(expr) in _LEAVES:

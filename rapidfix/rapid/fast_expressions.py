@@ -127,15 +127,15 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     operand = (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}{postfix(leaf)}|{truth})"
                rf"|{STRING})")
     simple = rf"(?:{operand}{follow})+"
-    # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
-    # most are
-    # (a name with its components and indices of names and numbers: `p7.trans.x`,
+    # a name with its components and indices of names and numbers (`p7.trans.x`,
     # `path{3}`)
     name_ref = rf"{value_name}(?:(?=[.{{]){postfix(leaf)})?"
     # such a name with at least one component or index, as a whole value (where quick
     # has refused the name alone)
     element = (rf"(?={NAME_START}){value_name}(?={WS}*[.{{]){postfix(leaf)}"
                rf"(?={WS}*[,;)\\])")
+    # first tried: a value that is a single name, (negated) number or TRUE/FALSE, as
+    # most are
     quick = (rf"(?:(?:-{WS}*)?{number}|(?={NAME_START})(?:{value_name}|(?i:TRUE|FALSE){word_end}))"
              rf"(?={WS}*[,;)\\])")
     # a string as a whole value (elsewhere it is an operand)

@@ -317,6 +317,37 @@ ENDMODULE
     assert 350.0 in values and 307.0 in values  # the target's z + nLift; + nTurn in `more`
 
 
+def test_pieces_that_distinct_tails_share_are_read_once_per_scope_as_the_general_route_does():
+    # `Offs(p1,gun.tframe.trans.z*2+nLift,p1.trans.x,0)`: every move its own tail (it
+    # names its target), the first offset one piece in all; a piece's value, or its
+    # refusal, is its scope's (a routine's parameter of the same name shadows it)
+    text = f"""MODULE M
+  PERS tooldata gun:={TOOL};
+  CONST robtarget p1:={TARGET};
+  CONST robtarget p2:={TARGET};
+  CONST num nLift:=50;
+  VAR num nRun:=1;
+  PROC main()
+    nRun := nRun + 1;
+    MoveL Offs(p1,gun.tframe.trans.z*2+nLift,p1.trans.x,0),v100,z1,gun;
+    MoveL Offs(p2,gun.tframe.trans.z*2+nLift,p2.trans.x,0),v100,z1,gun;
+    MoveL Offs(p1,nRun*2,p1.trans.y,0),v100,z1,gun;
+    MoveL Offs(p2,nRun*2,p2.trans.y,0),v100,z1,gun;
+  ENDPROC
+  PROC other(num nLift)
+    MoveL Offs(p1,gun.tframe.trans.z*2+nLift,p1.trans.x,0),v100,z1,gun;
+    MoveL Offs(p2,gun.tframe.trans.z*2+nLift,p2.trans.x,0),v100,z1,gun;
+  ENDPROC
+ENDMODULE
+"""
+    program = assert_same_model(text)
+    targets = [m.target for m in program.motions]
+    assert [t.static for t in targets[:2]] == [True, True]
+    assert targets[0].value[0] == (251.0, -1.5, 300.0)  # x 1 + 100*2 + 50, y -2.5 + 1
+    assert not any(t.static for t in targets[4:])  # nLift is a parameter there
+    assert "nRun" in targets[2].reason and targets[3].reason == targets[2].reason
+
+
 def test_calls_of_calls_read_in_one_step_give_the_general_model():
     """A call whose first argument is itself such a call (`Offs(RelTool(p1,0,0,1),0,0,2)`),
     nested up to the limit and past it, with every refusal at each level: the plain
