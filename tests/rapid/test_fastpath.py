@@ -403,6 +403,9 @@ def test_a_grouped_value_reads_the_rest_once():
 
 PIECES = [
     "MoveL p1,v100,z1,tool0;",
+    "MoveL Offs(p1,t.tframe.trans.z*2,p1.trans.x,0),v1,z1,t;",  # components, elements
+    "MoveL path{2},v1,z1,t; MoveL Offs(path{2},0,0,nZ{1}),v1,z1,t;",
+    "MoveL grid{1, 2}.trans, v1, z1, t; MoveL p . trans, v1, z1, t;",
     "IF a THEN MoveL p1,v100,z1,tool0; Set do1; ENDIF",  # IF blocks: in a run when of calls
     "if n > 1 then\n ! c\n x := 1;\nendif",
     "IF b THEN ENDIF",
@@ -713,7 +716,7 @@ def test_spaced_targets_declared_and_inline_parse_to_the_plain_tree(data):
 
 @pytest.mark.parametrize("gap", ["\x1a", " \x1a", "\x1a\n  "])
 def test_a_dos_end_of_file_inside_a_target_reads_as_the_grammar_reads_it(gap):
-    """\x1a is the grammar's whitespace between tokens, but not inside its
+    """\\x1a is the grammar's whitespace between tokens, but not inside its
     NUMERIC_AGGREGATE (whose `\\s` lacks it): a target with one there is an aggregate
     of items, also after targets of the same text without it (whose rests are kept)."""
     plain = "[[1.5,-2,3],[1,0,0,0],[0,-1,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]]"

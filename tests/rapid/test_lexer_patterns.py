@@ -80,20 +80,24 @@ _NUMBERS = ["0", "1.5", "-2", "- 3", ".5", "1e3", "0x1F", "1.", "9E+09", "+1", "
 _AGGREGATES = ["[[1,2,3],[1,0,0,0]]", "[1, 2]", "[[1,2],3]", "[ ]", "[[-1.5e3,.5],[9E+09]]",
                "[[1,2]", "[1,[2,[3]]]"]
 _SPACE = st.sampled_from(["", " ", "  ", "\t", "\n  "])
+_ELEMENTS = ["p.trans.x", "path{3}", "grid{i, 2}.trans", "p . trans", "p{i+1}", "q{1}{2}",
+             "r.x{2}", "p.", "p{}", "p.1", "p{-1}", "tMill.tframe.trans.z*2", "p.trans.x-1"]
 
 
 @st.composite
 def _plain_value(draw) -> str:
-    kind = draw(st.sampled_from(["name", "number", "call", "aggregate"]))
+    kind = draw(st.sampled_from(["name", "number", "call", "aggregate", "element"]))
     if kind == "name":
         return draw(st.sampled_from(_NAMES))
+    if kind == "element":  # components and indices, some not RAPID (`p.`, `p{}`)
+        return draw(st.sampled_from(_ELEMENTS))
     if kind == "number":
         return draw(st.sampled_from(_NUMBERS))
     if kind == "aggregate":
         return draw(st.sampled_from(_AGGREGATES))
     numbers = draw(st.lists(st.sampled_from(_NUMBERS), min_size=1, max_size=4))
     # a name, an inline target, or such a call itself (`RelTool(Offs(p1,0,0,5),0,0,0)`)
-    head = draw(st.sampled_from(_NAMES + _AGGREGATES) | _plain_value())
+    head = draw(st.sampled_from(_NAMES + _AGGREGATES + _ELEMENTS) | _plain_value())
     text = f"{draw(st.sampled_from(_NAMES))}({draw(_SPACE)}{head}"
     offsets = st.sampled_from(_NUMBERS + _NAMES + ["-nLift", "- n", "n.x", "n{2}", "nLift + 5",
                                                     "n*2", "-n / 2", "n -2", "1e-5-1",
