@@ -87,7 +87,7 @@ class Evaluator:
         if expr.op == "NOT":
             if isinstance(value, bool):
                 return not value, "bool"
-        elif _is_num(value):
+        elif isinstance(value, float):  # (_is_num, without the call)
             return (-value if expr.op == "-" else value), "num"
         elif _is_pos(value):
             return (tuple(-v for v in value) if expr.op == "-" else value), kind
@@ -97,7 +97,7 @@ class Evaluator:
         left, ltype = self.typed(expr.left)
         right, rtype = self.typed(expr.right)
         op = expr.op
-        if _is_num(left) and _is_num(right):
+        if isinstance(left, float) and isinstance(right, float):  # (_is_num of both)
             return _num_op(op, left, right)
         if isinstance(left, bool) and isinstance(right, bool):
             if op in ("AND", "OR", "XOR", "=", "<>"):
@@ -250,7 +250,7 @@ _TYPED: dict[type, Callable[[Evaluator, Any], TypedValue]] = {
     s.LazyFunctionCall: Evaluator._lazy_call,
     s.Index: Evaluator._index,  # `path{12}`: an array of targets, element by element
     s.NumericAggregate: lambda ev, e: (e.value, None),
-    s.Aggregate: lambda ev, e: (tuple(ev.typed(item)[0] for item in e.items), None),
+    s.Aggregate: lambda ev, e: (tuple([ev.typed(item)[0] for item in e.items]), None),
     s.String: lambda ev, e: (e.value, "string"),
     s.Bool: lambda ev, e: (e.value, "bool"),
     s.Paren: lambda ev, e: ev.typed(e.inner),
