@@ -128,7 +128,9 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
                rf"|{STRING})")
     simple = rf"(?:{operand}{follow})+"
     # a name with its components and indices of names and numbers (`p7.trans.x`,
-    # `path{3}`)
+    # `path{3}`), the first written right after the name as programs write it (a look at
+    # one character spares every plain name the postfix; `p7 .trans` goes the general
+    # route)
     name_ref = rf"{value_name}(?:(?=[.{{]){postfix(leaf)})?"
     # such a name with at least one component or index, as a whole value (where quick
     # has refused the name alone)
