@@ -12,7 +12,9 @@ parentheses, numbers, strings (`"Count: " + NumToStr(n,0)`), names, array elemen
 of expressions.
 
 The lexer's patterns decide which statements a run takes and check their argument
-lists (fastpath splits those without checking them again). A value that is not one
+lists (fastpath splits those without checking them again), but for an aggregate of sums
+of names and numbers (`[[x0+nStep*2,y0,z0],...]`), which they take as runs of its
+characters, as they take a condition's text. A value that is not one
 fastpath reads itself (PLAIN_VALUE: a name, a (negated) number, a function call, an
 array element of names and numbers) goes to the reader, which checks every token
 again as Lark's contextual lexer would cut it (NUMBER and NAME taken greedily, `DIV`
@@ -187,7 +189,17 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
     aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
-    value = (f"(?:(?=\\[)(?:{loose}|{deep}|(?!{loose}|{deep}){aggregate})"
+    # An aggregate of up to two levels whose items are sums of names and numbers
+    # (`[[x0+nStep*2,y0,z0],[1,0,0,0],...]`, `[[rb.robax.rax_1, 0, ...],rb.extax]`,
+    # `[vTcp*2,500,5000,1000]`), taken loosely as runs of their characters: checked token
+    # by token, an item of sums cost several times a numeric group's time. The reader
+    # checks it as it checks a condition (NotFast where it is not RAPID, as for a
+    # malformed number in a numeric aggregate). After `loose`, which takes most of
+    # its texts faster; `aggregate` takes the rest (strings, calls, deeper nesting).
+    sum_chars = rf"[-+*\x2f0-9.A-Za-z_{LATIN1_LETTERS}, \t\f\v\r\n\x1a]*"
+    sums = rf"\[{sum_chars}(?:\[{sum_chars}\]{sum_chars})*\]"
+    value = (f"(?:(?=\\[)(?:{loose}|(?!{loose}){sums}|{deep}"
+             f"|(?!{loose}|{sums}|{deep}){aggregate})"
              f"|{quick}|{named_call}|{string}|(?!{quick}|{named_call}|{string})"
              f"(?:{term}{follow})+)")
     # a separator is refused before the list's end however much space stands between
@@ -199,7 +211,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # subset of `arguments` that the lexer tries first. It has one way to take each
     # text (every alternative starts with a character of its own), and takes a plain
     # argument list in about two thirds of the general pattern's time.
-    plain = rf"(?:{quick}|{named_call}|(?=\[){loose}|{element})"
+    plain = rf"(?:{quick}|{named_call}|(?=\[)(?:{loose}|(?!{loose}){sums})|{element})"
     # after the first: a plain value, an optional argument of one (`\V:=120`) or a switch
     # (`\Conc`), after a comma, or without one before a `\` (`plain` written twice only)
     item = (rf"(?:(?:\\{WS}*{plain_name}{WS}*:={WS}*)?{plain}"

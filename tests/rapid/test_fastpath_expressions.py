@@ -216,6 +216,75 @@ def test_an_aggregate_of_numbers_with_arithmetic_is_read_fast_to_the_plain_tree(
     assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
+# Aggregates of sums of names and numbers, which the lexer takes as runs of their
+# characters (fast_expressions: `sums`) and the reader checks token by token.
+SUMS = [
+    "[[x0+nStep*2,y0,z0],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]",
+    "[[rb.robax.rax_1, 0, rb.robax.rax_3, rb.robax.rax_4+p4, rb.robax.rax_5, rb.robax.rax_6],"
+    "rb.extax]",
+    "[vTcp*2,500,5000,1000]",
+    "[ [ a , b ] , c ]",
+    "[a DIV 2, b MOD 3, 2DIV 3, -a*-b, - - 1, +a]",
+    "[NOT b, TRUE, a AND b OR c XOR d, e]",
+    "[Step, Div, ENDPROC, PROC, ERROR, TO, e, E5, x1E5]",
+    "[1e5, .5, 5., 0x1F, 0b101, 0o17, 1.e-3, 2E+09-1]",
+    "[a . b, a.b.c]",
+    "[a\x1a+1, b]",
+    "[[1-1,2],[a\r\n,b\t]]",
+    "[\u00c4rger+1, \u00f6l]",
+]
+# Not RAPID, though made of the same characters: refused as the plain grammar refuses it.
+NOT_SUMS = ["[a b]", "[1.2.3+x]", "[x,]", "[a,,b]", "[]", "[ , ]", "[_a]", "[a.1]", "[MOD 1]",
+            "[x DIV]", "[NOT]", "[a NOT b]", "[-]", "[x1+1E]", "[1E+]", "[0x1G]",
+            "[[a],b c]", "[[a]b]", "[a[1]]"]
+
+
+def _sum_statements(value: str) -> list[str]:
+    return [f"Foo {value}, 1;", f"MoveL p1,{value},z1,tool0;", f"n := {value};",
+            f"Foo a \\A:={value};"]
+
+
+@pytest.mark.parametrize("value", SUMS)
+def test_an_aggregate_of_sums_stays_in_its_run_with_the_plain_tree(value):
+    for statement in _sum_statements(value):
+        text = routine("Stop;", statement, "Stop;")
+        tree = fast_parser().parse(text)
+        body = tree.modules[0].items[0].body
+        assert all(isinstance(item, (s.LazyCall, s.Assignment)) for item in body), statement
+        assert shape(tree) == plain_tree(text)
+    text = module(f"VAR rec r:={value};", f"VAR rec q{{2}}:={value};", "VAR num n:=1;")
+    calls = next(t for t in fast_parser().terminals if t.name == "FAST_DECLS")
+    assert re.fullmatch(calls.pattern.to_regexp(), "\n".join(text.splitlines()[1:-1]))
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+
+
+def _message(text: str) -> str:
+    from rapidfix.exceptions import RapidSyntaxError
+    from rapidfix.rapid import parse_program
+
+    with pytest.raises(RapidSyntaxError) as err:
+        parse_program(text, "t.mod")
+    return str(err.value)
+
+
+@pytest.mark.parametrize("value", NOT_SUMS)
+def test_a_broken_aggregate_of_sums_is_refused_with_the_plain_grammars_message(value,
+                                                                              monkeypatch):
+    """The lexer lets these through; the reader refuses them (NotFast), and the plain
+    grammar reads the file and says where it is wrong, as it says for the text alone."""
+    from rapidfix.rapid import parse
+
+    fast_parser()  # built: parse_source takes the fast route for a small text too
+    for statement in [*_sum_statements(value), None]:
+        text = (routine("Stop;", statement, "Stop;") if statement is not None
+                else module("VAR num k:=1;", f"VAR rec r:={value};", "VAR num n:=1;"))
+        assert_parses_as_plain(text)
+        fast = _message(text)
+        with monkeypatch.context() as m:
+            m.setattr(parse, "parse_text", lambda t: rapid_parser().parse(t))
+            assert fast == _message(text)
+
+
 @pytest.mark.parametrize("value", ["[[1+1,2],]", "[[1+1,2],[3],,]", "[[1+1,2],[3]]]",
                                    "[[1+1,2],[3] 4]", "[[1+1,2],[3],NOT]"])
 def test_a_position_with_arithmetic_before_a_broken_rest_is_refused_as_plain(value):
