@@ -479,10 +479,20 @@ def _call_node(text: str, start: int) -> s.Call:
 
 def _inner_tail(text: str) -> CallTail:
     """The CallTail of a function call's arguments after its first, read once per
-    distinct text."""
+    distinct text; a text new but of a known shape (its digits aside: `,p7.trans.x*0,0)`
+    after `,p6.trans.x*0,0)`) is the known one's with the values that differ read again."""
     tail = _INNER_TAILS.get(text)
     if tail is None:
-        tail = CallTail(text, _INNER_PIECE)
+        key = None
+        if '"' not in text and _RADIX(text) is None:
+            key = text.encode("utf-8", "surrogatepass").translate(_ONES)
+            known = _TAIL_SHAPES.get(key)
+            if known is not None:
+                tail = known[1].reshaped(known[0], text)
+        if tail is None:
+            tail = CallTail(text, _INNER_PIECE)
+            if key is not None:
+                _TAIL_SHAPES.keep(key, (text, tail))
         _INNER_TAILS.keep(text, tail)
     return tail
 
@@ -902,6 +912,27 @@ class CallTail:
                 to if value_end == end else shift + value_end, *fields)))
         return made
 
+    def reshaped(self, text: str, other: str) -> CallTail | None:
+        """The tail of `other`, a text of the same shape as this tail's `text` (the same
+        but for digits, none after a radix prefix nor in a string): the same splits,
+        each value whose text differs read again as `_tail` reads it; None where an
+        option's name holds a digit (then `other` is read in full)."""
+        entries = []
+        for entry in self.entries:
+            start, end, option, value_start, value_end = (
+                entry[1], entry[2], entry[3], entry[5], entry[6])
+            if option is not None and not option.isalpha():
+                return None
+            if (value_end > value_start
+                    and text[value_start:value_end] != other[value_start:value_end]):
+                read = _value_entry(other[value_start:value_end], value_start)
+                entry = ((entry[0], *read[1:3], None, *read) if option is None
+                         else (entry[0], start, end, option, *read))
+            entries.append(entry)
+        tail = CallTail(None)
+        tail.entries = tuple(entries)
+        return tail
+
     def values(self) -> list[tuple[str, str | None, s.Expr | None]]:
         """(kind, option name or None, the value's node or None) of each argument, the
         nodes as they were read at some other place: what a reader of values needs (a
@@ -913,6 +944,9 @@ class CallTail:
 # of procedure calls and of function calls, and the expressions read by _read.
 _TAILS: Memo = Memo(TAIL_LIMIT)
 _INNER_TAILS: Memo = Memo(TAIL_LIMIT)
+# The shape of a function call's tail (its digits made 1s) -> (a text of that shape, its
+# CallTail): see _inner_tail.
+_TAIL_SHAPES: Memo = Memo(TAIL_LIMIT)
 _READ: Memo = Memo(TAIL_LIMIT)
 # The shape of an expression text (its digits made 1s) -> its nodes and where the text
 # stood (see _read_by_shape), or None for a shape whose nodes are read in full.
@@ -1282,8 +1316,8 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _READ, _SHAPES, _LEADS, _ENTRIES, _AGGREGATE_RESTS,
-                 _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _LEADS, _ENTRIES,
+                 _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

@@ -499,6 +499,41 @@ def test_texts_that_differ_in_their_digits_share_a_shape_not_their_nodes():
     assert again.args[1].name == "A2" and fastpath._SHAPES[b"f(1\\A1:=1)"] is None
 
 
+@st.composite
+def calls_of_one_shape(draw: st.DrawFn) -> tuple[str, str]:
+    """A function call's text whose tail holds expressions (perhaps an optional argument),
+    and the same with other digits."""
+    offsets = draw(st.lists(expression(), min_size=1, max_size=3))
+    option = draw(st.sampled_from(["", " \\Rz:=-n*2", "\\Sw", "\\V1:=2", " \\A2"]))
+    text = f"Offs(p1,{','.join(offsets)}{option})"
+    return text, re.sub(r"\d", lambda _: draw(st.sampled_from("0123456789")), text)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(calls_of_one_shape())
+def test_a_call_tail_of_a_known_shape_is_read_as_in_full(pair):
+    # the second call's tail comes from the first's (fastpath._inner_tail, CallTail.reshaped)
+    forget_texts()
+    first, second = pair
+    assert_parses_as_plain(routine(f"MoveL {first},v100,z1,tool0;",
+                                   f"MoveL {second},v100,z1,tool0;", f"Foo {second};"))
+
+
+def test_call_tails_that_differ_in_their_digits_share_a_shape():
+    forget_texts()
+    text = routine(*(f"MoveL Offs(p{k},0,p{k}.trans.x*{k},nZ{k % 3} \\Rz:={k}.5),v100,z1,t;"
+                     for k in range(3, 9)))
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert len(fastpath._TAIL_SHAPES) == 1 and len(fastpath._INNER_TAILS) == 6
+    # a radix prefix decides how its digits read, and an option's name is not read again:
+    # such tails are read in full
+    forget_texts()
+    text = routine("Foo Offs(p1,0x1F,2);", "Foo Offs(p1,0x2F,2);", "Foo Offs(p1,1 \\V1:=2);",
+                   "Foo Offs(p1,1 \\V2:=2);")
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert len(fastpath._TAIL_SHAPES) == 1
+
+
 # Targets moved by a function of a name and numbers (the lexer's `named_call`, tried
 # before the general terms), and texts next to that form that it must leave to them.
 NAMED_CALLS = [
