@@ -176,8 +176,13 @@ class NameAllocator:
         self._heads: set[str] = set()
         #: truncated base -> the suffix counter of the name last handed out for it: the
         #: free counters of a base only grow (names are never released), so the next
-        #: search starts there (many long stems truncated alike stay linear)
+        #: search starts there
         self._counter: dict[str, int] = {}
+        #: (the text a suffix of so many digits follows, the digits) -> a counter below
+        #: which every suffix of that many digits is taken: long stems that differ only
+        #: past what a suffix cuts off (`...Slot00123`, `...Slot00124`) share these
+        #: names, and each would otherwise try every one taken before (`_free_from`)
+        self._families: dict[tuple[str, int], int] = {}
 
     def _scan(self, head: str) -> None:
         """Take every word of the texts that begins with `head` (lower case): a superset
@@ -228,14 +233,12 @@ class NameAllocator:
             tried: dict[str, int] = {}
             for n, key in enumerate(keys):
                 if key in taken:
-                    base, counter, candidate = names[n], tried.get(key, 1), key
-                    while candidate in taken:
-                        counter += 1
-                        suffix = f"_{counter}"
-                        names[n] = base[: MAX_IDENTIFIER - len(suffix)] + suffix
-                        candidate = names[n].lower()
+                    base = names[n]
+                    counter = self._free_from(base, tried.get(key, 1) + 1)
+                    suffix = f"_{counter}"
+                    names[n] = base[: MAX_IDENTIFIER - len(suffix)] + suffix
                     tried[key] = counter
-                    key = candidate
+                    key = names[n].lower()
                 taken.add(key)
             return names
         return [self.allocate(s, prefix) for s in stems]
@@ -257,15 +260,32 @@ class NameAllocator:
         taken = self._taken
         memo = key  # every candidate of `base` is made from these characters
         counter = self._counter.get(memo, 1)
-        if counter > 1:
-            suffix = f"_{counter}"
-            candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
-            key = candidate.lower()
-        while key in taken:
-            counter += 1
+        if counter > 1 or key in taken:
+            counter = self._free_from(base, max(counter, 2))
             suffix = f"_{counter}"
             candidate = base[: MAX_IDENTIFIER - len(suffix)] + suffix
             key = candidate.lower()
         taken.add(key)
         self._counter[memo] = counter
         return candidate
+
+    def _free_from(self, base: str, counter: int) -> int:
+        """The smallest suffix counter from `counter` (2 or more) whose name, `base` (an
+        ASCII identifier) cut to leave room for `_<counter>`, is free; the caller takes
+        that name. What it finds taken is remembered per family (`_families`): the
+        names it passed over stay taken, as does the one the caller takes."""
+        taken, families = self._taken, self._families
+        lower = base.lower()
+        while True:
+            digits = len(str(counter))
+            top = 10 ** digits  # the first counter with more digits
+            family = (lower[: MAX_IDENTIFIER - 1 - digits], digits)
+            known = families.get(family, 2 if digits == 1 else top // 10)
+            start = counter = max(counter, known)
+            head = family[0] + "_"
+            while counter < top and head + str(counter) in taken:
+                counter += 1
+            if start == known:  # taken from the family's first counter up to here
+                families[family] = counter + 1 if counter < top else top
+            if counter < top:
+                return counter

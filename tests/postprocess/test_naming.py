@@ -112,6 +112,44 @@ def test_a_thousand_long_names_cut_alike_are_distinct_and_numbered_in_order():
                                    "PositionOfTheLeftBracket" + str(k)) for k in range(1, 1000)]
 
 
+class _CountedSet(set):
+    """A set that counts how often it is asked whether it holds a name."""
+
+    looks = 0
+
+    def __contains__(self, key: object) -> bool:
+        self.looks += 1
+        return super().__contains__(key)
+
+
+def test_long_names_that_differ_past_the_cut_are_found_in_linear_time():
+    """Stems that differ only in what a suffix cuts off (`...Slot00123`, `...Slot00124`)
+    share their suffixed names: each is still the first free one, and the allocator asks
+    about a bounded number of names per name (it asked about every one taken before,
+    which made a rewrite of 100,000 such targets spend minutes here)."""
+    stems = [f"pPickPositionStationA_Slot{k:05d}" for k in range(1200)]
+    names = NameAllocator()
+    names._taken = counted = _CountedSet()
+    got = [names.allocate(stem) for stem in stems]
+    expected: list[str] = []
+    for stem in stems:
+        expected.append(_first_free({e.lower() for e in expected}, "jt_" + stem))
+    assert got == expected
+    assert counted.looks <= 4 * len(stems)
+    # the list route: names that fit, each taken already (a program rewritten again)
+    stems = [f"pPickPositionStationA_Sl{k:05d}" for k in range(1200)]
+    names = NameAllocator(["jt_" + stem for stem in stems])
+    names._taken = counted = _CountedSet(names._taken)
+    got = names.allocate_many(stems)
+    taken = {"jt_" + stem.lower() for stem in stems}
+    expected = []
+    for stem in stems:
+        expected.append(_first_free(taken, "jt_" + stem))
+        taken.add(expected[-1].lower())
+    assert got == expected
+    assert counted.looks <= 6 * len(stems)
+
+
 # texts of letters (two cases), digits, underscores, separators and characters that are
 # not ASCII (one lower-cases to two characters, one to an ASCII letter)
 _WORDY = st.text(alphabet="abpAP_19 ,;\n!xéKİ", max_size=80)
