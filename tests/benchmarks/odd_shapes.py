@@ -91,7 +91,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
-              "inline_data")
+              "inline_data", "long_names")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -331,6 +331,17 @@ def _inline_data(n: int) -> list[str]:
              f"[FALSE,{k % 5 + 1},{1.5 * (k % 5 + 1):g},0.3,0.3,0.03,0.3], tMill"
              "\\WObj:=wPlate;" for k in range(n)]
     return [*_head("InlineData"), *digits, *_parts(moves), "ENDMODULE"]
+
+
+def _long_names(n: int) -> list[str]:
+    """Targets named as a cell's programmer names them, near RAPID's 32 characters
+    (`pPickPositionStationA_Slot00017`): `jt_` and such a name is cut, and the cut names
+    of a hundred targets at a time are alike."""
+    name = [f"pPickPositionStationA_Slot{k:05d}" for k in range(n)]
+    decls = [line.replace(f"robtarget p{k}:=", f"robtarget {name[k]}:=")
+             for k, line in enumerate(_decls(n))]
+    moves = [f"    MoveL {name[k]}, v200, z1, tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("LongNames"), *decls, *_parts(moves), "ENDMODULE"]
 
 
 def _tails(n: int) -> list[str]:
@@ -635,7 +646,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "lower": _lower, "upper": _upper, "exponent": _exponent, "data_last": _data_last,
              "elements": _elements, "routine_targets": _routine_targets,
              "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets,
-             "one_routine": _one_routine, "inline_data": _inline_data}
+             "one_routine": _one_routine, "inline_data": _inline_data,
+             "long_names": _long_names}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
