@@ -489,6 +489,8 @@ def _inner_tail(text: str) -> CallTail:
             known = _TAIL_SHAPES.get(key)
             if known is not None:
                 tail = known[1].reshaped(known[0], text)
+                if tail is None:  # an option named with a digit: read in full
+                    key = None
         if tail is None:
             tail = CallTail(text, _INNER_PIECE)
             if key is not None:
