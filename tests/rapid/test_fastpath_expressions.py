@@ -253,8 +253,8 @@ def test_an_aggregate_of_sums_stays_in_its_run_with_the_plain_tree(value):
         assert all(isinstance(item, (s.LazyCall, s.Assignment)) for item in body), statement
         assert shape(tree) == plain_tree(text)
     text = module(f"VAR rec r:={value};", f"VAR rec q{{2}}:={value};", "VAR num n:=1;")
-    calls = next(t for t in fast_parser().terminals if t.name == "FAST_DECLS")
-    assert re.fullmatch(calls.pattern.to_regexp(), "\n".join(text.splitlines()[1:-1]))
+    decls = next(t for t in fast_parser().terminals if t.name == "FAST_DECLS")
+    assert re.fullmatch(decls.pattern.to_regexp(), "\n".join(text.splitlines()[1:-1]))
     assert shape(fast_parser().parse(text)) == plain_tree(text)
 
 
