@@ -88,7 +88,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     numbers, numeric aggregates, calls of a name and numbers), `selectors` (the
     components and indices of an assignment's target after its name). A function
     call's arguments are sums of operands (names with their components and indices,
-    numbers, signs), calls of such sums (one level deep) and optional arguments; a value
+    numbers, signs), calls of such sums (two levels deep) and optional arguments; a value
     may also be a sum of such operands, function calls and parenthesised sums, or an
     aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
     (two levels, three levels). `terminals` holds rapid.lark's regular expressions by
@@ -179,10 +179,12 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     # otherwise a statement that fails near its end (a syntax error, or a call the fast
     # path does not take) is retried in every combination, 2^n for n such arguments.
     either = rf"(?:{quick}|(?!{quick}){simple})"
-    # a function call's arguments may be calls of sums themselves, one level deep
-    # (`Offs(RelTool(p,0,0,5),0,0,-nLift)`)
+    # a function call's arguments may be calls of sums themselves, two levels deep
+    # (`Offs(RelTool(p,0,0,5),0,0,-nLift)`, `RelTool(Offs(RelTool(p,0,0,5),0,0,1),0,0,0)`)
     nested = rf"(?={NAME_START}){value_name}{WS}*{call_list(f'(?:{loose}|{either})')}"
-    inner = call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})")
+    deeper = (rf"(?={NAME_START}){value_name}{WS}*"
+              + call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})"))
+    inner = call_list(rf"(?:{loose}|{deeper}(?={WS}*[,)\\])|{either})")
     paren = rf"\({WS}*{simple}{WS}*\)"
     term = (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}(?:{WS}*{inner})?{postfix(simple)}"
             rf"|{truth})|{paren}|{STRING})")

@@ -17,9 +17,10 @@ two levels, with only whitespace between the pieces. The callbacks split a token
 into exactly the syntax nodes the grammar's own rules build (same node types,
 offsets and values), so nothing downstream can tell the difference. Values may
 also be negated numbers and function calls of such values (`Offs(p1,0,0,-10)`),
-whose required arguments may be such calls themselves, one level deep
-(`Offs(RelTool(p1,0,0,5),0,0,-10)`), and whole-line comments may stand between the
-statements of a run. Values may also be arithmetic (rapidfix.rapid.fast_expressions):
+whose required arguments may be such calls themselves, two levels deep
+(`Offs(RelTool(p1,0,0,5),0,0,-10)`, `Offs(RelTool(Offs(p1,0,0,1),0,0,5),0,0,-10)`),
+and whole-line comments may stand between the statements of a run. Values may also
+be arithmetic (rapidfix.rapid.fast_expressions):
 signs, `+ - * / DIV MOD`, parentheses, record components and array elements
 (`Offs(pHome,0,0,-nDepth)`, `0-rModel.numDiameter/2`, `RelTool(p,0,0,0\\Rz:=-1*nAngle)`,
 `vWeld{i+1}`), and aggregates of such sums (`[100+nStep*2,500,5000,1000]`); those

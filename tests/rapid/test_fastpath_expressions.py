@@ -54,6 +54,10 @@ READ_FAST = [
     "MoveL Offs(RelTool(p1,0,0,-nStep),nStep*2,0,-1),v100,z1,tool0;",
     "MoveL RelTool(Offs(p, a.b{1}, -1*c, 0), 0, 0, 0\\Rz:=-n), v100, fine, tool0;",
     "MoveC Offs(RelTool(p1,0,-d,0),0,0,h/2), Offs(p2,0,0,-h), v100, z1, tool0;",
+    # and two levels deep
+    "MoveL Offs(RelTool(Offs(p1,0,0,1),0,0,1),0,0,-2), v100, z1, tool0;",
+    "MoveL RelTool(Offs(RelTool(p1,0,0,nZ*2),a.b,0,1 \\Rz:=5),0,0,0), v100, z1, tool0;",
+    "Foo f(g(h(1),2),3), Offs(p, RelTool(Offs(q,1,2,3),0,0,0 \\Rx:=f(1)), 0, 0);",
     # TRUE and FALSE as values
     "Foo TRUE, false \\A:=True;",
     "SetDO do1, TRUE;",
