@@ -91,7 +91,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
-              "inline_data", "long_names")
+              "inline_data", "long_names", "deep_calls")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -617,6 +617,17 @@ def _nested_calls(n: int) -> list[str]:
     return [*_head("NestedCalls"), *_decls(n), *_parts(moves), "ENDMODULE"]
 
 
+def _deep_calls(n: int) -> list[str]:
+    """Targets moved by calls two levels deep, as a hand-written cell composes them
+    (`Offs(RelTool(Offs(p7,0,0,-5),0,0,0\\Rz:=30),nDx*2,0,10)`), a third of them spaced."""
+    moves = [f"    MoveL Offs(RelTool(Offs(p{k},0,0,-5),0,0,0\\Rz:={k % 30}),nDx*{k % 3},0,10),"
+             "v100,z1,tMill\\WObj:=wPlate;" if k % 3 else
+             f"    MoveJ RelTool( Offs( RelTool(p{k}, 0, 0, 5), 0, {k % 4}, 0), 0, 0, -5), v200,"
+             " z5, tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("DeepCalls"), "  CONST num nDx:=0.5;", *_decls(n), *_parts(moves),
+            "ENDMODULE"]
+
+
 def _spaced_brackets(n: int) -> list[str]:
     """Targets spaced inside their brackets too, as some people and generators write
     them (`[ [x, y, z], [q1, q2, q3, q4], ... ]`): declared for half the moves, inline in
@@ -647,7 +658,7 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "elements": _elements, "routine_targets": _routine_targets,
              "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets,
              "one_routine": _one_routine, "inline_data": _inline_data,
-             "long_names": _long_names}
+             "long_names": _long_names, "deep_calls": _deep_calls}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
