@@ -90,18 +90,38 @@ def reason_kind(reason: str) -> str:
         reason = kind
 
 
+_NAME_IN_LABEL = re.compile(r"([A-Za-z][A-Za-z0-9_]*)(\s*\()?")
+_WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*(?![\w])")
+
+
+def _own_names(label: str) -> frozenset[str]:
+    """The data names a skipped move's label holds (`MoveL Offs(p7,0,0,10)` -> p7): not
+    its instruction, nor the functions it calls."""
+    return frozenset(m.group(1) for m in list(_NAME_IN_LABEL.finditer(label))[1:]
+                     if m.group(2) is None)
+
+
+def _without(names: frozenset[str], reason: str) -> str:
+    """`reason` with each whole word of `names` shown as '…'."""
+    if not names:
+        return reason
+    return _WORD.sub(lambda m: "…" if m.group() in names else m.group(), reason)
+
+
 def skipped_lines(skipped: list[Skipped], every: bool = False) -> list[str]:
     """The lines listing skipped moves, reasons in the command's words: every one, or past
     SKIP_LIST_LIMIT the first SKIP_LIST_HEAD and a count per kind of reason for the rest,
-    most frequent first."""
+    most frequent first. A move's own target names are particulars too (`p7 is not
+    declared`, each target of a program its own), a tool's or a work object's are not."""
     if every or len(skipped) <= SKIP_LIST_LIMIT:
         return [str(replace(move, reason=in_cli_words(move.reason))) for move in skipped]
     rest: dict[str, int] = {}
-    kinds: dict[str, str] = {}  # a reason -> its kind (many moves share their reason)
+    kinds: dict[tuple[str, str], str] = {}  # (label, reason) -> its kind (many share both)
     for move in skipped[SKIP_LIST_HEAD:]:
-        kind = kinds.get(move.reason)
+        kind = kinds.get((move.label, move.reason))
         if kind is None:
-            kind = kinds[move.reason] = reason_kind(in_cli_words(move.reason))
+            reason = _without(_own_names(move.label), in_cli_words(move.reason))
+            kind = kinds[(move.label, move.reason)] = reason_kind(reason)
         rest[kind] = rest.get(kind, 0) + 1
     counted = sorted(rest.items(), key=lambda item: -item[1])
     head = skipped[:SKIP_LIST_HEAD]

@@ -313,6 +313,32 @@ def test_a_program_failing_everywhere_lists_the_first_moves_and_counts_the_rest(
         "joint … at …° is outside … at p3_2")
 
 
+def test_moves_left_for_their_own_targets_are_counted_together():
+    """A program of VAR targets assigned at run time, or of targets declared elsewhere,
+    leaves each move for a reason that names its own target: past the listed head they
+    are counted as one kind of reason each, not one line per target. A tool's name stays
+    in the kind, and so does a function the move calls."""
+    from rapidfix.commands.rewrite import SKIP_LIST_HEAD, skipped_lines
+    from rapidfix.postprocess.rewrite import Skipped
+
+    moves = [Skipped(f"p.mod:{k}", f"MoveL p{k}", f"p{k}: VAR p{k} is assigned at line {k + 9}")
+             for k in range(60)]
+    moves += [Skipped(f"p.mod:{k}", f"MoveL Offs(q{k}, 0, 0, 10)",
+                      f"q{k} is not declared in this file (pass the file that declares it "
+                      "with RewriteOptions.emit)") for k in range(30)]
+    moves += [Skipped(f"p.mod:{k}", f"MoveL Offs(r{k},0,0,1)", "tool tBar: tBar is not declared "
+                      "in this file (pass it)") for k in range(5)]
+    moves += [Skipped("p.mod:1", "MoveL Offs(s,0,0,1)", "Offs: its result is out of reach")]
+    lines = skipped_lines(moves)
+    assert lines[SKIP_LIST_HEAD:] == [
+        "76 more moves left as they were, not listed (--all-skipped lists them):",
+        "  40 × …: VAR … is assigned at line …",
+        "  30 × … is not declared in this file …",
+        "  5 × tool tBar: tBar is not declared in this file …",
+        "  1 × Offs: its result is out of reach"]
+    assert len(skipped_lines(moves, every=True)) == len(moves)
+
+
 @pytest.mark.parametrize(("own", "warned"), [
     ("  PERS tooldata tBar:=[TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];", True),
     ("  LOCAL PERS tooldata tBar:=[TRUE,[[0,0,90],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];",
