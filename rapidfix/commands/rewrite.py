@@ -77,6 +77,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 #: are listed and the rest counted by the kind of their reason.
 SKIP_LIST_LIMIT = 50
 SKIP_LIST_HEAD = 20
+#: the most kinds of reason, differing only in the moves' own targets, counted apart
+NAMED_KINDS = 3
 _PARTICULARS = re.compile(r"\[[^\[\]]*\]|\([^()]*\)|(?<![\w.])-?\d+(?:\.\d+)?(?![\w.])")
 
 
@@ -111,19 +113,28 @@ def _without(names: frozenset[str], reason: str) -> str:
 def skipped_lines(skipped: list[Skipped], every: bool = False) -> list[str]:
     """The lines listing skipped moves, reasons in the command's words: every one, or past
     SKIP_LIST_LIMIT the first SKIP_LIST_HEAD and a count per kind of reason for the rest,
-    most frequent first. A move's own target names are particulars too (`p7 is not
-    declared`, each target of a program its own), a tool's or a work object's are not."""
+    most frequent first. Where more than NAMED_KINDS kinds differ only in the move's own
+    target (`p7 is not declared`, `p8 is not declared`, ...: each target of a program
+    its own), that name is a particular too, and they are counted as one kind; a tool's
+    or a work object's name always stays."""
     if every or len(skipped) <= SKIP_LIST_LIMIT:
         return [str(replace(move, reason=in_cli_words(move.reason))) for move in skipped]
-    rest: dict[str, int] = {}
-    kinds: dict[tuple[str, str], str] = {}  # (label, reason) -> its kind (many share both)
+    # kind without the move's own names -> kind as written -> count
+    groups: dict[str, dict[str, int]] = {}
+    kinds: dict[tuple[str, str], tuple[str, str]] = {}  # (label, reason) -> both kinds
     for move in skipped[SKIP_LIST_HEAD:]:
-        kind = kinds.get((move.label, move.reason))
-        if kind is None:
-            reason = _without(_own_names(move.label), in_cli_words(move.reason))
-            kind = kinds[(move.label, move.reason)] = reason_kind(reason)
-        rest[kind] = rest.get(kind, 0) + 1
-    counted = sorted(rest.items(), key=lambda item: -item[1])
+        both = kinds.get((move.label, move.reason))
+        if both is None:
+            reason = in_cli_words(move.reason)
+            both = kinds[(move.label, move.reason)] = (
+                reason_kind(_without(_own_names(move.label), reason)), reason_kind(reason))
+        named = groups.setdefault(both[0], {})
+        named[both[1]] = named.get(both[1], 0) + 1
+    rest: list[tuple[str, int]] = []
+    for kind, named in groups.items():
+        rest.extend(named.items() if len(named) <= NAMED_KINDS
+                    else [(kind, sum(named.values()))])
+    counted = sorted(rest, key=lambda item: -item[1])
     head = skipped[:SKIP_LIST_HEAD]
     return [*(str(replace(move, reason=in_cli_words(move.reason))) for move in head),
             f"{len(skipped) - SKIP_LIST_HEAD:,} more moves left as they were, not listed "

@@ -315,27 +315,32 @@ def test_a_program_failing_everywhere_lists_the_first_moves_and_counts_the_rest(
 
 def test_moves_left_for_their_own_targets_are_counted_together():
     """A program of VAR targets assigned at run time, or of targets declared elsewhere,
-    leaves each move for a reason that names its own target: past the listed head they
-    are counted as one kind of reason each, not one line per target. A tool's name stays
-    in the kind, and so does a function the move calls."""
+    leaves each move for a reason that names its own target: past the listed head, more
+    than a few such targets are counted as one kind of reason, not one line per target
+    (a few keep their names). A tool's name stays in the kind, and so does a function
+    the move calls."""
     from rapidfix.commands.rewrite import SKIP_LIST_HEAD, skipped_lines
     from rapidfix.postprocess.rewrite import Skipped
 
     moves = [Skipped(f"p.mod:{k}", f"MoveL p{k}", f"p{k}: VAR p{k} is assigned at line {k + 9}")
              for k in range(60)]
     moves += [Skipped(f"p.mod:{k}", f"MoveL Offs(q{k}, 0, 0, 10)",
-                      f"q{k} is not declared in this file (pass the file that declares it "
-                      "with RewriteOptions.emit)") for k in range(30)]
+                      f"q{k}: declared without a value") for k in range(30)]
     moves += [Skipped(f"p.mod:{k}", f"MoveL Offs(r{k},0,0,1)", "tool tBar: tBar is not declared "
                       "in this file (pass it)") for k in range(5)]
     moves += [Skipped("p.mod:1", "MoveL Offs(s,0,0,1)", "Offs: its result is out of reach")]
+    # a few targets, named: pSafe is the one file to pass
+    moves += [Skipped(f"p.mod:{k}", f"MoveJ {name}", f"{name} is not declared in this file "
+                      "(pass it)") for k, name in enumerate(["pSafe"] * 3 + ["pHome"])]
     lines = skipped_lines(moves)
     assert lines[SKIP_LIST_HEAD:] == [
-        "76 more moves left as they were, not listed (--all-skipped lists them):",
+        "80 more moves left as they were, not listed (--all-skipped lists them):",
         "  40 × …: VAR … is assigned at line …",
-        "  30 × … is not declared in this file …",
+        "  30 × …: declared without a value",
         "  5 × tool tBar: tBar is not declared in this file …",
-        "  1 × Offs: its result is out of reach"]
+        "  3 × pSafe is not declared in this file …",
+        "  1 × Offs: its result is out of reach",
+        "  1 × pHome is not declared in this file …"]
     assert len(skipped_lines(moves, every=True)) == len(moves)
 
 
