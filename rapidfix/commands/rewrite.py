@@ -92,8 +92,9 @@ def reason_kind(reason: str) -> str:
         reason = kind
 
 
-_NAME_IN_LABEL = re.compile(r"([A-Za-z][A-Za-z0-9_]*)(\s*\()?")
-_WORD = re.compile(r"(?<![\w.])[A-Za-z][A-Za-z0-9_]*(?![\w])")
+# a name (RAPID's letters are ISO 8859-1's), and whether a call's parenthesis follows it
+_NAME_IN_LABEL = re.compile(r"(?<![\w.])([^\W\d_]\w*)(\s*\()?")
+_WORD = re.compile(r"(?<![\w.])[^\W\d_]\w*")
 
 
 def _own_names(label: str) -> frozenset[str]:
