@@ -484,9 +484,8 @@ def _inner_tail(text: str) -> CallTail:
     after `,p6.trans.x*0,0)`) is the known one's with the values that differ read again."""
     tail = _INNER_TAILS.get(text)
     if tail is None:
-        key = None
-        if '"' not in text and _RADIX(text) is None:
-            key = text.encode("utf-8", "surrogatepass").translate(_ONES)
+        key = _shape_key(text)
+        if key is not None:
             known = _TAIL_SHAPES.get(key)
             if known is not None:
                 tail = known[1].reshaped(known[0], text)
@@ -607,6 +606,14 @@ _ONES = bytes.maketrans(b"0123456789", b"1111111111")
 _RADIX = re.compile(r"0[xXbBoO]").search
 
 
+def _shape_key(text: str) -> bytes | None:
+    """`text` with every digit made a 1, or None where its digits decide how it is read
+    (after a radix prefix, in a string)."""
+    if '"' in text or _RADIX(text) is not None:
+        return None
+    return text.encode("utf-8", "surrogatepass").translate(_ONES)
+
+
 class _NoShape(Exception):
     """A node _reshaped cannot make from a text's shape (read the text in full)."""
 
@@ -620,9 +627,8 @@ def _read_by_shape(text: str, start: int) -> s.Expr:
     from one read before are that one's nodes at the new place, with the numbers and
     names taken from the new text (_reshaped): a program's expressions often differ only
     in the target they name or the numbers they hold. NotRead as read_expression."""
-    key = None
-    if '"' not in text and _RADIX(text) is None:
-        key = text.encode("utf-8", "surrogatepass").translate(_ONES)
+    key = _shape_key(text)
+    if key is not None:
         shape = _SHAPES.get(key)
         if shape is not None:
             node, at = shape
