@@ -214,7 +214,7 @@ class Evaluator:
 
     def _piece(self, expr: s.Expr) -> Value:
         """`value` of a node of a kept tail, once per node (`_pieces`)."""
-        if type(expr) in _LEAVES:
+        if type(expr) in s.LEAF_NODES:  # read at once (a name's value is kept by the lookup)
             return self.value(expr)
         pieces = self._pieces
         known = pieces.get(id(expr))
@@ -234,8 +234,6 @@ class Evaluator:
 
 #: the most tails, and their pieces, an evaluator keeps (`Evaluator._scoped_tail`)
 _KEPT_TAILS = 4096
-# nodes read at once (a name's value is kept by the lookup)
-_LEAVES = frozenset({s.NameRef, s.Number, s.NumericAggregate, s.String, s.Bool})
 
 
 def _placeholder(evaluator: Evaluator, expr: s.Placeholder) -> TypedValue:

@@ -543,7 +543,7 @@ def _depth(node: s.Node) -> int:
     names hold none below them, and an aggregate only its items: a table of records
     (thousands of literals) is walked at a set lookup per item."""
     deepest, stack = 0, [(node, 1)]
-    pop, push, leaves, aggregate = stack.pop, stack.append, _LEAVES, s.Aggregate
+    pop, push, leaves, aggregate = stack.pop, stack.append, s.LEAF_NODES, s.Aggregate
     while stack:
         item, level = pop()
         if level > deepest:
@@ -561,9 +561,6 @@ def _depth(node: s.Node) -> int:
                     push((part, level + 1))
     return deepest
 
-
-# node types that hold no node (_depth)
-_LEAVES = frozenset({s.Number, s.String, s.Bool, s.NameRef, s.NumericAggregate})
 
 
 def _read_whole(text: str, start: int, read: Callable[[_Reader], list[s.Expr]]

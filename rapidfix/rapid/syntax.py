@@ -143,6 +143,8 @@ Expr = (
     Number | String | Bool | NumericAggregate | Aggregate | NameRef | Index | Component
     | Call | Unary | Binary | Paren | Placeholder
 )
+#: the expression nodes that hold no other node
+LEAF_NODES = frozenset({Number, String, Bool, NameRef, NumericAggregate})
 
 
 @dataclass(slots=True, eq=False)
