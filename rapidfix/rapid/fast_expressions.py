@@ -185,7 +185,16 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     deeper = (rf"(?={NAME_START}){value_name}{WS}*"
               + call_list(rf"(?:{loose}|{nested}(?={WS}*[,)\\])|{either})"))
     inner = call_list(rf"(?:{loose}|{deeper}(?={WS}*[,)\\])|{either})")
-    paren = rf"\({WS}*{simple}{WS}*\)"
+    # parentheses around sums of operands, of function calls of sums and of parentheses
+    # around sums (`(DInput(di1) = 1)`, `((a + b) * c)`, `(NumToStr(n, 0) + "s")`)
+    def operand_or_call(paren: str, index: str) -> str:
+        """An operand (its indices `index`), a function call of sums (one level), or
+        `paren`."""
+        return (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}"
+                rf"(?:{WS}*{call_list(either)})?{postfix(index)}|{truth})|{paren}|{STRING})")
+
+    simple_paren = rf"\({WS}*{simple}{WS}*\)"
+    paren = rf"\({WS}*(?:{operand_or_call(simple_paren, leaf)}{follow})+{WS}*\)"
     term = (rf"{signs}(?:{number}|(?={NAME_START})(?:{value_name}(?:{WS}*{inner})?{postfix(simple)}"
             rf"|{truth})|{paren}|{STRING})")
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
@@ -220,8 +229,17 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
             rf"|\\{WS}*{plain_name}(?!{WS}*:=))")
     plain_arguments = rf"{plain}(?:(?:{WS}*,{WS}*|{WS}*(?=\\)){item})*"
     condition = condition_pattern(plain_name)
+    # A compact IF's condition (`IF nCount > 3 Incr nCount;`, `IF DInput(di1) = 1 Set
+    # do1;`): operands, calls of sums and parentheses, joined by operators, up to the
+    # first operand that whitespace and a name follow (no operand is followed by one
+    # inside a condition, so that is where its statement starts; an operator's keyword,
+    # which also follows so, is refused as the statement's name by the caller's pattern).
+    ends = (rf"(?:{WS}*{operator}{WS}*(?=[-+.0-9A-Za-z{LATIN1_LETTERS}(\"])"
+            rf"|(?={WS}+{NAME_START}))")
+    compact_condition = rf"(?:{operand_or_call(paren, simple)}{ends})+"
     return {"value": value, "arguments": arguments, "selectors": postfix(simple),
-            "condition": condition, "plain_arguments": plain_arguments}
+            "condition": condition, "plain_arguments": plain_arguments,
+            "compact_condition": compact_condition}
 
 
 def condition_pattern(name: str, stop: str | None = None) -> str:

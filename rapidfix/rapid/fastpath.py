@@ -195,7 +195,11 @@ def _patterns() -> dict[str, str]:
     # first tried: a call whose arguments are all plain, as most are (a subset of the
     # general pattern's statements, so the same tokens)
     plain_call = f"{call_name}{WS}+{expression['plain_arguments']}{WS}*;"
-    call = f"(?:{plain_call}|{general_call})"
+    # either, perhaps as a compact IF's statement (`IF bOn Set do1;`): the IF and its
+    # condition before it (split_calls finds the condition's end with compact_head)
+    compact = expression["compact_condition"]
+    compact_head = f"(?i:IF){_WORD_END}{WS}*({compact}){WS}+(?={call_name})"
+    call = f"(?:(?i:IF){_WORD_END}{WS}*{compact}{WS}+)?(?:{plain_call}|{general_call})"
     # array dimensions: numbers or names of constants (`{50}`, `{2,3}`, `{nChannels,10}`)
     dim = f"(?:{number}|{value_name})"
     dims = rf"\{{{WS}*{dim}(?:{WS}*,{WS}*{dim})*{WS}*\}}"
@@ -208,7 +212,7 @@ def _patterns() -> dict[str, str]:
     block_head = (rf"(?i:IF){_WORD_END}(?=[^\n]*(?i:ENDIF))"
                   rf"{condition_pattern(plain_name, then)}{then}")
     return {"call": call, "plain_call": plain_call, "general_call": general_call,
-            "decl": decl, "block_head": block_head,
+            "decl": decl, "block_head": block_head, "compact_head": compact_head,
             **head_patterns(expression["condition"], False)}
 
 
@@ -992,13 +996,21 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
     head, find, piece_at = _CALL_HEAD.compiled.match, text.index, CALL_PIECE.compiled.match
     quote, statement_end = text.find, _STATEMENT_END.match
     pos, size = 0, len(text)
+    compact = None  # a compact IF whose statement comes next: (calls, start, condition)
     while pos < size:
+        if compact is not None and calls:
+            calls, compact = _compact_if(compact, calls[0]), None
         m = head(text, pos)
         name = m.group(1)
         if len(name) in (2, 5) and name[0] in "IiEe":  # (no call has a keyword's name)
             word = name.upper()  # one of BLOCK_WORDS, or a call's name
             if word == "IF":
                 block = _head_splitters()["if"].match(text, m.start(1))
+                if block is None:  # no THEN: a compact IF, its statement next
+                    block = _compact_head().match(text, m.start(1))
+                    compact = (calls, base + m.start(1), _condition(block, base))
+                    calls, pos = [], block.end()
+                    continue
                 blocks.append((calls, base + m.start(1), _condition(block, base)))
                 calls, pos = [], block.end()
                 continue
@@ -1081,9 +1093,27 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
             shift = last.end
         calls.append(lazy_call(base + m.start(1), base + pos, intern(name), head_arg,
                                tail, shift, second_arg, lead))
+    if compact is not None:
+        calls = _compact_if(compact, calls[0])
     if blocks:  # pragma: no cover - the lexer takes an IF block with its ENDIF only
         raise NotFast(text[:40])
     return calls
+
+
+def _compact_if(pending: tuple[list[s.Statement], int, s.Expr],
+                statement: s.Statement) -> list[s.Statement]:
+    """The statements before a compact IF (`pending`: them, the IF's start and its
+    condition), with the IF of `statement` after them."""
+    outer, start, condition = pending
+    outer.append(s.CompactIf(start, statement.end, condition, statement))
+    return outer
+
+
+@functools.lru_cache(maxsize=1)
+def _compact_head() -> re.Pattern[str]:
+    """A compact IF's head as the lexer took it, up to its statement, the condition in
+    group 1 (the lexer's own pattern: the condition ends where it found it to)."""
+    return re.compile(_patterns()["compact_head"])
 
 
 def _made_tail(tails: Memo, text: str, pending: tuple[CallTail, s.Expr, int]) -> CallTail:

@@ -76,10 +76,15 @@ READ_FAST = [
     'WaitUntil(nCmdInput=0);',
     'TPWrite("Drilling hole 1 of 11!");',
     'Foo f("a)b", "c") + ")", CJointT(\\TaskName:="T_ROB1"), g(TRUE, a >= 1 XOR b);',
+    # function calls and parentheses inside parentheses
+    "WaitUntil (DInput(diReady) = 1) \\MaxTime:=(nWait * 2);",
+    'TPWrite "n=" + (NumToStr(n, 0) + "s"), ((a + b) * c), -(f(a, -b) + g(\\z)) / 2;',
+    "Foo (a{1} + b.c), (TRUE), (NOT f(x) AND (y > 1)), ((1));",
 ]
 
 ASSIGNMENTS = [
     "pCur := Offs(p1, 0.5, 0, 0);",
+    "x := (a + f(b)) * (NumToStr(n, 0) + \"s\");",
     "pCur.trans.z := pCur.trans.z + 1;",
     "nCount:=nCount+1;",
     "a{i+1}.b := [1,2,3];",

@@ -183,10 +183,14 @@ def condition(draw: st.DrawFn, depth: int = 0) -> str:
     return f"({draw(condition(depth + 1))})"
 
 
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN", "FOR", "TEST", "CASE"]))
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN", "FOR", "TEST", "CASE",
+                                     "COMPACT"]))
 def test_random_conditions_parse_as_with_the_plain_grammar(cond, where):
-    if where == "FOR":
+    if where == "COMPACT":  # a compact IF in a run of calls, its statement a call or not
+        body = ["Stop;", f"IF {cond} MoveL p1,v100,z1,tool0;", f"IF {cond} n := {cond};",
+                f"IF {cond} RETURN 1;", "Stop;"]
+    elif where == "FOR":
         body = [f"FOR i FROM {cond} TO 3 STEP {cond} DO", "  Stop;", "ENDFOR"]
     elif where == "TEST":
         body = [f"TEST {cond}", "CASE 1:", "  Stop;", "ENDTEST"]
@@ -216,6 +220,57 @@ def test_moves_inside_fast_heads_build_the_plain_model():
                       "  ENDPROC", "ENDMODULE", ""])
     program = assert_same_model(text)
     assert [m.in_loop for m in program.motions] == [False, False, True]
+
+
+# ------------------------------------------------ compact IFs inside a run
+@pytest.mark.parametrize("statement", [
+    "IF nCount > 3 Incr nCount;", "IF DInput(diReady) = 1 SetDO doGo, 1;",
+    "IF bOn MoveL p1,v100,z1,tMill\\WObj:=wPlate;", "IF NOT bOn nCount := 0;",
+    "IF a AND b c;", "if x=1 Foo;", 'IF s = "a b" Foo "x;y";',
+    "IF f(a) = 1 AND (b > 2) Foo \\x:=1;",
+    "IF p.trans.x > 1 p.trans.x := 0;", "IF a{i+1} b{2} := 3;", "IF -1 < x Foo;",
+    "IF a\n  Foo;", "IF a > 5. Stop;", "IF a MOD 2 = 0 Foo;", "IF a DIV b Foo;", "IF TRUE Foo;",
+    "IF a = FALSE Foo;", "IF a.b. c Foo;", "IF a .b Foo;", "IF a\tFoo ;", "IF Ñ{1} = 1 Ö;",
+    "IF (DInput(di1) = 1) AND NOT (n > f(g, 2)) x := (a + f(b)) * 2;",
+    "IF a OR b MoveL Offs(p1,0,0,n),v100,z1,tool0;",
+])
+def test_a_compact_if_of_a_call_is_a_statement_of_the_run(statement):
+    """`IF c <call>` (no THEN) is read in the run around it, its condition ended where
+    the grammar ends it (at the first operand that whitespace and a name follow), as
+    the CompactIf node the grammar builds."""
+    text = routine("Stop;", statement, "Stop;")
+    assert fast_tokens(text) == ["FAST_PROC", "FAST_CALLS"]
+    tree = fast_parser().parse(text)
+    assert shape(tree) == plain_tree(text)
+    assert [type(item) for item in tree.modules[0].items[0].body] == [
+        s.LazyCall, s.CompactIf, s.LazyCall]
+
+
+@pytest.mark.parametrize(("statement", "tokens"), [
+    ("IF a RETURN;", ["FAST_CALLS", "FAST_RETURN", "FAST_CALLS"]),  # not a call
+    ("IF a OR b GOTO x;", ["FAST_CALLS", "FAST_CALLS"]),
+    ("IF a ! why\n Foo;", ["FAST_CALLS", "FAST_CALLS"]),  # a comment inside
+    ("IF a = f(\\A?B) Foo;", ["FAST_CALLS", "FAST_CALLS"]),  # a conditional argument
+])
+def test_other_compact_ifs_keep_the_plain_tokens(statement, tokens):
+    text = routine("Stop;", statement, "Stop;")
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert fast_tokens(text) == ["FAST_PROC", *tokens]
+
+
+def test_moves_in_compact_ifs_build_the_plain_model():
+    lines = [f"  PERS tooldata tMill:={TOOL};", f"  PERS wobjdata wPlate:={WOBJ};",
+             "  VAR num n:=0;", "  VAR bool bOk:=TRUE;"]
+    lines += [f"  CONST robtarget p{i}:={TARGET};" for i in range(3)]
+    body = ["MoveL p0,v100,z1,tMill\\WObj:=wPlate;",
+            "IF n > 1 AND bOk MoveL p1,v100,z1,tMill\\WObj:=wPlate;",
+            "IF NOT bOk MoveJ Offs(p2,0,0,n),v100,fine,tMill\\WObj:=wPlate;",
+            "IF DInput(di1) = 1 n := n + 1;"]
+    text = "\n".join(["MODULE M", *lines, "  PROC main()", *("    " + b for b in body),
+                      "  ENDPROC", "ENDMODULE", ""])
+    assert fast_tokens(text) == ["FAST_DECLS", "FAST_PROC", "FAST_CALLS"]
+    program = assert_same_model(text)
+    assert [m.name for m in program.motions] == ["MoveL", "MoveL", "MoveJ"]
 
 
 PROC_BODY = ["  MoveL p1,v100,z1,tool0;", "  ERROR", "    RETURN;", "ENDPROC"]
