@@ -58,21 +58,24 @@ NAME = rf"{NAME_START}[A-Za-z0-9_{LATIN1_LETTERS}]*"
 STRING = r'"[^"\r\n]*(?:""[^"\r\n]*)*"'
 
 
-def _nested(open_: str, close: str) -> str:
-    """A bracketed group up to three levels deep (its inside not checked; a bracket in
-    a string does not count)."""
+def _nested(open_: str, close: str, levels: int = 3) -> str:
+    """A bracketed group up to `levels` deep (its inside not checked; a bracket in a
+    string does not count)."""
     o, c = re.escape(open_), re.escape(close)
     # (written as "plain characters, then strings each followed by plain characters":
     # one way only to match, so a failure is not retried in other splits)
     other = f'[^{o}{c}"]*(?:{STRING}[^{o}{c}"]*)*'
-    return rf"{o}{other}(?:{o}{other}(?:{o}{other}{c}{other})*{c}{other})*{c}"
+    group = rf"{o}{other}{c}"
+    for _ in range(levels - 1):
+        group = rf"{o}{other}(?:{group}{other})*{c}"
+    return group
 
 
 # A value in text the lexer has checked: strings, pieces without whitespace or
-# separators, and bracketed groups, with whitespace between them (but not after the
-# last).
+# separators, and bracketed groups (aggregates four levels deep: a two-dimensional
+# array of robtargets), with whitespace between them (but not after the last).
 _CHUNK = (rf"(?:{STRING}|[^\",;\\()\[\]{{}} \t\f\v\r\n\x1a]+|{_nested('(', ')')}"
-          rf"|{_nested('[', ']')}|{_nested('{', '}')})")
+          rf"|{_nested('[', ']', 4)}|{_nested('{', '}')})")
 VALUE_TEXT = rf"{_CHUNK}(?:{WS}*{_CHUNK})*"
 
 
@@ -91,7 +94,7 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     numbers, signs), calls of such sums (two levels deep) and optional arguments; a value
     may also be a sum of such operands, function calls and parenthesised sums, or an
     aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
-    (two levels, three levels). `terminals` holds rapid.lark's regular expressions by
+    (two levels; three or four levels). `terminals` holds rapid.lark's regular expressions by
     terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
     # (Lark gives the grammar's \r and \n as the characters themselves)

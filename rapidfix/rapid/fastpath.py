@@ -116,10 +116,16 @@ _LOOSE_AGGREGATE = rf"\[{_GROUP_CHARS}(?:\[{_GROUP_CHARS}\]{_GROUP_CHARS})*\]"
 # array of robtargets, `[[[...],[...],[...],[...]], ...]`), perhaps over several lines.
 _ITEM = r"\[[-+0-9.eE,]*(?:\[[-+0-9.eE,]*\][-+0-9.eE,]*)+\]"
 _DEEP_AGGREGATE = rf"\[{WS}*{_ITEM}(?:{WS}*,{WS}*{_ITEM})*{WS}*\]"
-# How a three-level aggregate of the fast terminals starts (a two-level one never does).
+# An aggregate of those, four levels deep (a two-dimensional array of robtargets, its
+# rows perhaps over lines).
+_DEEPER_AGGREGATE = rf"\[{WS}*{_DEEP_AGGREGATE}(?:{WS}*,{WS}*{_DEEP_AGGREGATE})*{WS}*\]"
+# How a three-level aggregate of the fast terminals starts (a two-level one never does),
+# and a four-level one (a three-level one never does).
 _DEEP_START = re.compile(rf"\[{WS}*\[[-+0-9.eE,]*\[")
+_DEEPER_START = re.compile(rf"\[{WS}*\[{WS}*\[[-+0-9.eE,]*\[")
+_DEEP_AGGREGATES = f"(?:{_DEEP_AGGREGATE}|{_DEEPER_AGGREGATE})"
 # A value without a call, for splitting a token whose syntax has been checked already:
-# an aggregate (up to three levels), a negated number, a name or a number.
+# an aggregate (up to four levels), a negated number, a name or a number.
 # (an expression too: fast_expressions)
 _SIMPLE_TEXT = _EXPRESSION_TEXT
 # A function call of such values (`Offs(p1,0,0,-10)`).
@@ -186,7 +192,7 @@ def _patterns() -> dict[str, str]:
     # at a cost that grows with their length.
     expression = expression_patterns(
         {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
-        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATE))
+        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATES))
     value = expression["value"]
     # a procedure call, or an assignment: its value is taken by the arguments' pattern
     # (written once), and split_calls refuses (NotFast) what is more than one value
@@ -526,6 +532,10 @@ def _value_node(text: str, start: int) -> s.Expr:
     if first == "[":
         try:
             if _DEEP_START.match(text):
+                if _DEEPER_START.match(text):
+                    return s.Aggregate(start, end, [
+                        _deep_aggregate(m.group(), start + m.start(), _RESTS)
+                        for m in _DEEP_ROW.finditer(text, 1)])
                 return _deep_aggregate(text, start, _RESTS)
             # an inline target: its position read, the rest once per distinct text
             grouped = grouped_value(text, _RESTS)
@@ -729,7 +739,9 @@ def _grouped_read(text: str, start: int) -> s.Aggregate | None:
 
 
 # The aggregates read above without fast_expressions: those of the patterns' loose forms.
-_PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}")
+_PLAIN_AGGREGATE = re.compile(f"{_LOOSE_AGGREGATE}|{_DEEP_AGGREGATE}|{_DEEPER_AGGREGATE}")
+# A row of a four-level aggregate (a three-level one).
+_DEEP_ROW = re.compile(_DEEP_AGGREGATE)
 # An index of an array element, or a dimension: a number or a name.
 _INDEX_ITEM = re.compile(rf"[A-Za-z0-9_.+\-{LATIN1_LETTERS}]+")
 
@@ -744,6 +756,16 @@ def _index_node(text: str, start: int) -> s.Index:
         at = start + open_at + 1
         return s.Index(start, start + len(text), base,
                        [s.Number(at, at + len(inner), float(inner), inner)])
+    if inner.replace(",", "").isdigit() and inner.isascii():  # `grid{12,3}`: decimals
+        numbers = []
+        at = start + open_at + 1
+        for digits in inner.split(","):
+            if not digits:
+                break  # `{1,,2}`: read in full (which decides)
+            numbers.append(s.Number(at, at + len(digits), float(digits), digits))
+            at += len(digits) + 1
+        else:
+            return s.Index(start, start + len(text), base, numbers)
     indices = [_value_node(m.group(), start + m.start())
                for m in _INDEX_ITEM.finditer(text, open_at + 1)]
     return s.Index(start, start + len(text), base, indices)
@@ -1313,15 +1335,15 @@ def split_decls(text: str, base: int) -> list[s.DataDecl]:
                 init: Any = numeric_aggregate(at, at + len(value), (position, *items))
                 sizes: Any = ()
         if m is None:
-            m = general(text, pos)  # (the next declaration, as finditer would find it)
-            if m is None:
-                break
+            m = general(text, pos)
+            if m is None or m.start() != pos:  # pragma: no cover - the lexer took it
+                raise NotFast(text[pos:pos + 40])
             local, task, storage, type_name, name, dims, value = m.groups()
             init = None
             if value is not None:
                 at = base + m.start(7)
-                # two levels, or three (an array's items), of numbers only (an aggregate
-                # of sums, `[[x+1,...],...]`, is fast_expressions' to read)
+                # two levels, or three or four (an array's items), of numbers only (an
+                # aggregate of sums, `[[x+1,...],...]`, is fast_expressions' to read)
                 if _group_start(value) and _PLAIN_AGGREGATE.fullmatch(value):
                     try:
                         grouped = grouped_value(value, rests)

@@ -238,10 +238,14 @@ MIXED = {
         f"CONST robtarget path{{3}}:=[{TARGET},{TARGET},\n  {TARGET}];",
         f"VAR robtarget grid{{2,1}} := [ {TARGET} ,\n\t{TARGET} ];",
         "CONST num n{2}:=[1,2];", "PERS num m{ 3 }:=[[1],[2],[3]];", "VAR num e{2};",
-        "CONST robtarget odd{2}:=[[[1,2]],[[3]]];", "PROC main()",
+        "CONST robtarget odd{2}:=[[[1,2]],[[3]]];",
+        # two-dimensional arrays of targets: aggregates four levels deep, rows over lines
+        f"CONST robtarget grid2{{2,2}}:=[[{TARGET},{TARGET}],\n    [{TARGET},{TARGET}]];",
+        f"PERS robtarget grid3{{1,2}} := [ [ {TARGET} , {TARGET} ] ];", "PROC main()",
         "  MoveL path{1},v100,z1,tool0;", "  MoveL path {n{1}}, v100, z1, tool0;",
         "  MoveL grid{2, 1},v100,z1,tool0 \\WObj:=w;", "  MoveL path{i},v100,z1,tool0;",
         "  Foo path{0x2}, e{1} \\A:=n{2};", "  MoveL Offs(path{1},0,0,1),v100,z1,tool0;",
+        "  MoveL grid2{2,1},v100,z1,tool0;", "  MoveL grid2{12,007},v100,z1,tool0;",
         "ENDPROC",
     ),
 }
@@ -480,6 +484,9 @@ DATA = [
     "VAR num c{2,2}:=[[1, 2],\n [3, 4]];",
     "VAR num d{2,2}:=[[1 -1, 2], [3, 4]];",
     "VAR num e{2,2}:=[[1,\x1a2], [3, 4]];",
+    f"CONST robtarget g{{2,1}}:=[[{TARGET}],\n [{TARGET}]];",
+    f"CONST robtarget h{{2,1}}:=[[{TARGET}], [[1,2,3]]];",
+    "VAR num k{1,1,2}:=[[[[1,2]]]];",
 ]
 GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]
 
@@ -584,7 +591,24 @@ def test_a_comment_inside_a_statement_keeps_it_in_the_fast_run(piece):
             assert [type(node) for node in body] == [s.LazyCall] * 3, statement
 
 
-@pytest.mark.parametrize("index", ["1", "007", " 2 ", "0x2", "i", "n{1}", "1, 2", "١"])
+def test_two_dimensional_arrays_of_targets_are_declared_in_one_run():
+    """A 2-D array's aggregate is four levels deep; its rows may stand on lines of their
+    own. Each row is the three-level aggregate of an array of targets."""
+    text = module("VAR num n:=1;",
+                  f"CONST robtarget g{{2,2}}:=[[{TARGET},{TARGET}],\n    [{TARGET},{TARGET}]];",
+                  f"PERS robtarget h{{1,2}} := [ [ {TARGET} , {TARGET} ] ];", "VAR num k:=2;")
+    interactive = fast_parser().parse_interactive(text)
+    assert [t.type for t in interactive.iter_parse()
+            if t.type.startswith("FAST_")] == ["FAST_DECLS"]
+    tree = fast_parser().parse(text)
+    assert shape(tree) == plain_tree(text)
+    grid = tree.modules[0].items[1].init
+    assert [type(row) for row in grid.items] == [s.Aggregate, s.Aggregate]
+    assert [type(item) for item in grid.items[1].items] == [s.NumericAggregate] * 2
+
+
+@pytest.mark.parametrize("index", ["1", "007", " 2 ", "0x2", "i", "n{1}", "1, 2", "١", "12,3",
+                                   "1,2,30", "1,0x2", "1,n"])
 def test_array_elements_are_read_as_the_grammar_reads_them(index):
     text = routine(f"MoveL path{{{index}}},v100,z1,tool0;", f"x := path{{{index}}};")
     assert_parses_as_plain(text)
