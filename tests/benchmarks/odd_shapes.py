@@ -66,6 +66,12 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                declared for half the moves, inline in the others
 - one_routine: a CAM post that writes every move into one routine, inline targets
                (no routine ever ends before the file does)
+- compact_ifs: every other statement a compact IF (`IF bOn AND n >= 0 MoveL ...;`,
+               `IF DInput(diReady) = 1 SetDO doGo, 1;`), no THEN
+- paren_calls: function calls inside parentheses (`WaitUntil (DInput(di) = 1)
+               \\MaxTime:=(nWait * 2);`, `TPWrite "x=" + (NumToStr(n, 1) + " mm");`)
+- grids:       targets in two-dimensional arrays of 100 rows of 10, a row to a line,
+               every move to one element (`MoveL grid3{17,4}, ...`)
 - inline_data: declared targets whose numbers carry all the digits a double holds
                (`-149.50012345678901`, `0.2588190451025207`), moves with inline
                speeddata and zonedata aggregates, `\\T:=` times
@@ -91,7 +97,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
-              "inline_data", "long_names", "deep_calls")
+              "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -642,6 +648,54 @@ def _spaced_brackets(n: int) -> list[str]:
     return [*_head("SpacedBrackets"), *decls, *_parts(moves), "ENDMODULE"]
 
 
+def _compact_ifs(n: int) -> list[str]:
+    """A hand-written cell's guards without THEN (`IF bOn MoveL ...;`, `IF DInput(diReady)
+    = 1 SetDO doGo, 1;`): every other statement a compact IF, some around a move."""
+    moves = []
+    for k in range(n):
+        move = f"MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"
+        moves.append(f"    {move}" if k % 4 != 2 else f"    IF bOn AND nCount >= 0 {move}")
+        moves.append(("    IF nCount > 3 Incr nCount;",
+                      "    IF DInput(diReady) = 1 SetDO doGo, 1;", "    IF NOT bOn nCount := 0;",
+                      '    IF nCount MOD 50 = 0 TPWrite "Row";')[k % 4])
+    return [*_head("CompactIfs"), "  VAR num nCount:=0;", "  PERS bool bOn:=TRUE;",
+            *_decls(n), *_parts(moves, 1000), "ENDMODULE"]
+
+
+def _paren_calls(n: int) -> list[str]:
+    """Conditions and values with function calls inside parentheses, as people write
+    them (`WaitUntil (DInput(diReady) = 1) \\MaxTime:=(nWait * 2);`)."""
+    blocks = []
+    for k in range(n):
+        lines = (("    IF (DInput(diReady) = 1) AND (nCount < 5) THEN",
+                  f"      MoveL p{k},v100,z1,tMill\\WObj:=wPlate;", "    ENDIF",
+                  "    nCount := (nCount + 1) MOD 10;") if k % 2 else
+                 ("    WaitUntil (DInput(diReady) = 1) \\MaxTime:=(nWait * 2);",
+                  f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;",
+                  '    TPWrite "x=" + (NumToStr(nCount, 1) + " mm");'))
+        blocks.append("\n".join(lines))
+    return [*_head("ParenCalls"), "  VAR num nCount:=0;", "  CONST num nWait:=2;", *_decls(n),
+            *_parts(blocks, 300), "ENDMODULE"]
+
+
+def _grids(n: int) -> list[str]:
+    """Targets in two-dimensional arrays (a pallet's rows and columns), a hundred rows
+    of ten to an array, a row to a line; every move to one element (`grid3{17,4}`)."""
+    rows, cols = 100, 10
+    trans, confs = _targets(n)
+    targets = [_robtarget(trans[i], confs[i]) for i in range(n)]
+    per = rows * cols
+    out = [*_head("Grids")]
+    for g, first in enumerate(range(0, n, per)):
+        items = targets[first:first + per]
+        items += items[-1:] * (per - len(items))
+        lines = ["[" + ",".join(items[r * cols:(r + 1) * cols]) + "]" for r in range(rows)]
+        out.append(f"  CONST robtarget grid{g}{{{rows},{cols}}}:=[" + ",\n    ".join(lines) + "];")
+    moves = [f"    MoveL grid{k // per}{{{k % per // cols + 1},{k % cols + 1}}},v100,z1,"
+             "tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*out, *_parts(moves), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -658,7 +712,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "elements": _elements, "routine_targets": _routine_targets,
              "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets,
              "one_routine": _one_routine, "inline_data": _inline_data,
-             "long_names": _long_names, "deep_calls": _deep_calls}
+             "long_names": _long_names, "deep_calls": _deep_calls,
+             "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -242,3 +242,43 @@ def test_workers_are_forked_with_ctrl_c_held_back_and_take_it_once_ready(monkeyp
     assert held_at_submit == [True, True, True]
     assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])  # let go after
     assert results == [(False, signal.SIG_IGN)] * 3
+
+
+def test_a_file_waiting_for_a_worker_is_not_begun_once_the_batch_is_stopped(monkeypatch):
+    """Each worker has a second file waiting (batch.IN_FLIGHT_PER_WORKER), so it starts
+    the next at once; once Ctrl-C has set the stop flag, a worker that takes up a waiting
+    file does not begin it."""
+    import multiprocessing
+
+    from rapidfix.postprocess import batch
+
+    begun: list[tuple] = []
+    monkeypatch.setattr(batch, "_job", lambda job: begun.append(job) or "done")
+    stop = multiprocessing.get_context().Event()
+    monkeypatch.setattr(batch, "_STOP_FLAG", stop)
+    assert batch._job_unless_stopped(("a",)) == "done"
+    stop.set()
+    assert batch._job_unless_stopped(("b",)) is None
+    assert begun == [("a",)]
+
+
+def test_each_worker_has_a_file_waiting(monkeypatch):
+    """Two workers are given four of five files before the first result is awaited."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from rapidfix.postprocess import batch
+
+    submit, wait = ProcessPoolExecutor.submit, batch.wait
+    given: list[int] = []
+    monkeypatch.setattr(ProcessPoolExecutor, "submit",
+                        lambda self, fn, *args: submit(self, _worker_signals))
+
+    def counting_wait(running, **kwargs):
+        given.append(len(running))
+        return wait(running, **kwargs)
+
+    monkeypatch.setattr(batch, "wait", counting_wait)
+    results: list[tuple[bool, object]] = []
+    batch._run_parallel([("a", "b", f"f{k}", None, ()) for k in range(5)], 2, results,
+                        None, None)
+    assert given[0] == 4 and len(results) == 5

@@ -44,6 +44,13 @@ NEAR_MISSES = {
     "TEST without a clause": "TEST " + " + ".join(["a{1}"] * N) + " x;",
     "CASE without its colon": "TEST a CASE " + ", ".join(["1"] * N) + " x;",
     "RETURN without its end": "RETURN " + " + ".join(["\\A:=1"] * N) + " x",
+    # a compact IF's condition: up to the first operand that a name follows
+    "compact IF": "IF " + " AND ".join(["f(a, 1) = (b + g(c))"] * N) + " Foo x y;",
+    "compact IF of a keyword": "IF " + " OR ".join(['(a{1} > f("x"))'] * N) + " GOTO ;",
+    "compact IF without a statement": "IF " + " + ".join(["(f(1) + (a))"] * N) + " ;",
+    "parentheses of calls": "Foo " + ",".join(["(f(1) + (a))"] * N) + " x;",
+    "two-dimensional aggregates": "VAR robtarget g{2,2}:=["
+                                  + ",".join(["[[[1,2],[3]],[[4],[5]]]"] * N) + "] x;",
 }
 
 
@@ -72,7 +79,8 @@ def test_a_statement_the_fast_terminals_almost_take_is_refused_at_once(name, gua
     assert str(err.value).startswith("m.mod:3:")
 
 
-@pytest.mark.parametrize("name", ["options", "aggregates", "function calls"])
+@pytest.mark.parametrize("name", ["options", "aggregates", "function calls", "compact IF",
+                                  "parentheses of calls", "two-dimensional aggregates"])
 def test_the_same_statements_when_valid_are_read_fast(name, guard):
     statement = NEAR_MISSES[name].replace(" x y;", ";").replace(" x;", ";")
     text = f"MODULE M\n  PROC main()\n    {statement}\n  ENDPROC\nENDMODULE\n"
