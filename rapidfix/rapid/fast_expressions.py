@@ -265,8 +265,10 @@ def condition_pattern(name: str, stop: str | None = None) -> str:
 # (a name, a (negated) number, a call or an array element of names and numbers).
 _NAME = NAME
 _INDEX_ITEM = f"(?:{NUMBER}|{_NAME})"
+# (NOT before parentheses is the operator, not a function's name: `NOT (a)`)
+_NOT = rf"(?i:NOT)(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 PLAIN_VALUE = re.compile(
-    rf"(?:-{WS}*)?(?:{NUMBER})|{_NAME}(?:{WS}*(?:{_nested('(', ')')}"
+    rf"(?:-{WS}*)?(?:{NUMBER})|(?!{_NOT}){_NAME}(?:{WS}*(?:{_nested('(', ')')}"
     rf"|\{{{WS}*{_INDEX_ITEM}(?:{WS}*,{WS}*{_INDEX_ITEM})*{WS}*\}}))?")
 
 

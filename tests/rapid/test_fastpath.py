@@ -470,6 +470,15 @@ PIECES = [
     "Foo \\A:=f(1,2) , x.y;",
     f"MoveL {SPACED}, v100, z1, tool0;",
     "Foo [[1, 2] , [3]], [[1,\x1a2], [3]], [[1 -1, 2], [3]], [[ 1 ,2 ],\r\n[3 ]];",
+    # compact IFs, and function calls inside parentheses
+    "IF a > 1 Foo;",
+    "IF (f(x) = 1) AND b MoveL p1,v100,z1,tool0;",
+    "IF NOT b x := (a + f(b)) * 2;",
+    "IF a\r\n  Foo \\A;",
+    "IF a GOTO l;",
+    "IF a AND Foo;",
+    "WaitUntil (DInput(di1) = 1) \\MaxTime:=(n * 2);",
+    "Foo ((a + g(b, -1)) * c), (NOT f(x));",
 ]
 DATA = [
     f"CONST robtarget p:={TARGET};",

@@ -80,11 +80,14 @@ READ_FAST = [
     "WaitUntil (DInput(diReady) = 1) \\MaxTime:=(nWait * 2);",
     'TPWrite "n=" + (NumToStr(n, 0) + "s"), ((a + b) * c), -(f(a, -b) + g(\\z)) / 2;',
     "Foo (a{1} + b.c), (TRUE), (NOT f(x) AND (y > 1)), ((1));",
+    # NOT before parentheses is the operator, not a function (names may start with it)
+    "Foo NOT (a), not(b AND c), Nothing(a), NOTE(1), notx (2);",
 ]
 
 ASSIGNMENTS = [
     "pCur := Offs(p1, 0.5, 0, 0);",
     "x := (a + f(b)) * (NumToStr(n, 0) + \"s\");",
+    "bOk := NOT (bStop OR n > 2);",
     "pCur.trans.z := pCur.trans.z + 1;",
     "nCount:=nCount+1;",
     "a{i+1}.b := [1,2,3];",

@@ -187,9 +187,10 @@ def condition(draw: st.DrawFn, depth: int = 0) -> str:
 @given(condition(), st.sampled_from(["IF", "ELSEIF", "WHILE", "RETURN", "FOR", "TEST", "CASE",
                                      "COMPACT"]))
 def test_random_conditions_parse_as_with_the_plain_grammar(cond, where):
-    if where == "COMPACT":  # a compact IF in a run of calls, its statement a call or not
+    if where == "COMPACT":  # a compact IF in a run of calls, its statement a call or not;
+        # the condition as a value and in parentheses
         body = ["Stop;", f"IF {cond} MoveL p1,v100,z1,tool0;", f"IF {cond} n := {cond};",
-                f"IF {cond} RETURN 1;", "Stop;"]
+                f"IF {cond} RETURN 1;", f"Foo {cond}, ({cond});", "Stop;"]
     elif where == "FOR":
         body = [f"FOR i FROM {cond} TO 3 STEP {cond} DO", "  Stop;", "ENDFOR"]
     elif where == "TEST":
