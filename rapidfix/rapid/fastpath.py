@@ -180,6 +180,11 @@ def _patterns() -> dict[str, str]:
     expected_name = f"(?i:[a-z{latin1}][a-z0-9_{latin1}]*|<ID>)"
     if terminals["NAME"].pattern.to_regexp() != expected_name:  # pragma: no cover
         raise ValueError("rapid.lark's NAME changed; update rapidfix.rapid.fastpath")
+    after = {words: {w.upper() for w in _keywords_after(f"MODULE m\nPROC p({words}")}
+             for words in ("", "\\", "VAR ", "num ")}
+    if (after[""], after["\\"], after["VAR "], after["num "]) != (
+            set(ACCESS_WORDS), set(ACCESS_WORDS), set(), set()):  # pragma: no cover
+        raise ValueError("rapid.lark's parameters changed; update rapidfix.rapid.fastpath")
     call_name = _name(list(_keywords().values()))
     plain_name = _name(_keywords_after("MODULE m\nPROC p()\nx \\"))
     type_name = _name(_keywords_after("MODULE m\nVAR "))
@@ -227,6 +232,18 @@ def _keyword(words: str) -> str:
     return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
 
 
+# A routine's parameters, as rapid.lark's `parameters` takes them but for alternatives
+# (`\\a | b`) and placeholders: `[\\][VAR|PERS|INOUT] type name [{*, ...}]`, separated by
+# commas (an optional one may follow without). The first word is the access keyword where
+# it is one (the only keywords the grammar takes there: checked by `_patterns`); any
+# word after it, or after the type, is a name.
+ACCESS_WORDS = ("VAR", "PERS", "INOUT")
+_ACCESS = rf"(?i:{'|'.join(ACCESS_WORDS)}){_WORD_END}"
+_PARAMETER = (rf"(?:\\{WS}*)?(?:{_ACCESS}{WS}*{NAME}|(?!{_ACCESS}){NAME}){_WORD_END}{WS}*"
+              rf"{NAME}{_WORD_END}(?:{WS}*\{{{WS}*\*(?:{WS}*,{WS}*\*)*{WS}*\}})?")
+PARAMETERS = rf"{_PARAMETER}(?:(?:{WS}*,{WS}*|{WS}*(?=\\)){_PARAMETER})*"
+
+
 def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     """The patterns of the statements' heads that are one fast token each, by kind: the
     keywords, and between them the conditions (`condition`), a CASE's list of them or a
@@ -234,6 +251,7 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     token, whose syntax the lexer has checked)."""
     c = f"({condition})" if groups else condition
     name = f"({NAME}){_WORD_END}" if groups else f"{NAME}{_WORD_END}"
+    params = f"({PARAMETERS})?" if groups else f"(?:{PARAMETERS})?"
 
     return {
         "if": rf"(?i:IF){_WORD_END}{c}{_keyword('THEN')}",
@@ -247,9 +265,12 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
                 + ("" if groups else f"(?={_keyword('CASE|DEFAULT|ENDTEST')})"),
         "case": rf"(?i:CASE){_WORD_END}{c}:",
         "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
-        # a procedure without parameters, up to its body (`LOCAL PROC Path_10()`)
+        # a procedure's head up to its body (`LOCAL PROC Path_10()`, `PROC Pick(robtarget
+        # p, \\switch Slow)`), a function's (`FUNC num Twice(num x)`)
         "proc": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:PROC){_WORD_END}"
-                 rf"{WS}*{name}{WS}*\({WS}*\)"),
+                 rf"{WS}*{name}{WS}*\({WS}*{params}{WS}*\)"),
+        "func": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:FUNC){_WORD_END}"
+                 rf"{WS}*{name}{WS}*{name}{WS}*\({WS}*{params}{WS}*\)"),
     }
 
 
@@ -271,6 +292,8 @@ _HEAD_RULES = {
     "return": ("return_stmt", "-> fast_return_stmt", "return_stmt: RETURN expr? SEMI"),
     "proc": ("proc", "_body handler* ENDPROC -> fast_proc",
              'proc: LOCAL? PROC NAME "(" parameters? ")"'),
+    "func": ("func", "_body handler* ENDFUNC -> fast_func",
+             'func: LOCAL? FUNC NAME dims? NAME "(" parameters? ")"'),
 }
 _BODY_RULE = "_body: (data_decl | _statement)*"
 #: statements in one fast token at most. Python's regular expression engine keeps a
@@ -1427,12 +1450,47 @@ class FastSyntaxBuilder(SyntaxBuilder):
         return s.Return(head.start_pos, head.end_pos, value)
 
     def fast_proc(self, head: Token, *rest: Any) -> s.Routine:
-        # the plain rule's tokens, at the head's start: LOCAL? PROC NAME (no parameters)
-        local, name = _head_splitters()["proc"].fullmatch(str(head)).groups()
+        # the plain rule's tokens, at the head's start (LOCAL? PROC NAME), its parameters
+        m = _head_splitters()["proc"].fullmatch(str(head))
+        local, name, params = m.groups()
         start = head.start_pos
         words = [Token("LOCAL", local, start_pos=start)] if local else []
         words += [Token("PROC", "PROC", start_pos=start), Token("NAME", name)]
-        return self._routine("PROC", (*words, *rest))
+        return self._routine("PROC", (*words, _parameters(params, start + m.start(3)),
+                                      *rest))
+
+    def fast_func(self, head: Token, *rest: Any) -> s.Routine:
+        m = _head_splitters()["func"].fullmatch(str(head))
+        local, type_name, name, params = m.groups()
+        start = head.start_pos
+        words = [Token("LOCAL", local, start_pos=start)] if local else []
+        words += [Token("FUNC", "FUNC", start_pos=start), Token("NAME", type_name),
+                  Token("NAME", name)]
+        return self._routine("FUNC", (*words, _parameters(params, start + m.start(4)),
+                                      *rest))
+
+
+# One parameter of a checked head's list: the backslash of an optional one, the access
+# keyword, type, name and the stars of its dimensions.
+_PARAMETER_PARTS = re.compile(
+    rf"(?:{WS}*,)?{WS}*(\\{WS}*)?(?:({_ACCESS}){WS}*(?={NAME}))?({NAME}){WS}*({NAME})"
+    rf"(?:{WS}*\{{([^}}]*)\}})?")
+
+
+def _parameters(text: str | None, start: int) -> list[s.Parameter]:
+    """The Parameter nodes of a routine head's parameter list `text` at `start`, as
+    rapid.lark's `parameters` builds them."""
+    params: list[s.Parameter] = []
+    if text is None:
+        return params
+    for m in _PARAMETER_PARTS.finditer(text):
+        slash, access, type_name, name, stars = m.groups()
+        first = m.start(1) if slash is not None else m.start(2) if access else m.start(3)
+        end = m.end() if stars is not None else m.end(4)
+        params.append(s.Parameter(
+            start + first, start + end, None if access is None else access.upper(), type_name,
+            name, 0 if stars is None else stars.count("*"), slash is not None))
+    return params
 
 
 @functools.lru_cache(maxsize=1)
