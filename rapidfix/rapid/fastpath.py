@@ -209,8 +209,13 @@ def _patterns() -> dict[str, str]:
     # either, perhaps as a compact IF's statement (`IF bOn Set do1;`): the IF and its
     # condition before it (split_calls finds the condition's end with compact_head)
     compact = expression["compact_condition"]
-    compact_head = f"(?i:IF){_WORD_END}{WS}*({compact}){WS}+(?={call_name})"
-    call = f"(?:(?i:IF){_WORD_END}{WS}*{compact}{WS}+)?(?:{plain_call}|{general_call})"
+    # or a GOTO (`GOTO lRetry;`, or `IF n > 3 GOTO lDone;`)
+    label = _name(_keywords_after("MODULE m\nPROC p()\nGOTO "))
+    goto = f"(?i:GOTO){_WORD_END}{WS}*{label}{WS}*;"
+    compact_head = (f"(?i:IF){_WORD_END}{WS}*({compact}){WS}+"
+                    f"(?={call_name}|(?i:GOTO){_WORD_END})")
+    call = (f"(?:(?i:IF){_WORD_END}{WS}*{compact}{WS}+)?"
+            f"(?:{plain_call}|{general_call}|{goto})")
     # array dimensions: numbers or names of constants (`{50}`, `{2,3}`, `{nChannels,10}`)
     dim = f"(?:{number}|{value_name})"
     dims = rf"\{{{WS}*{dim}(?:{WS}*,{WS}*{dim})*{WS}*\}}"
@@ -853,8 +858,9 @@ def _nested(start: int, end: int, template: s.Expr) -> s.Expr:
     return _moved(template, start - template.start)
 
 
-#: the keywords that open and close an IF block in a run of calls (split_calls)
-BLOCK_WORDS = frozenset({"IF", "ENDIF"})
+#: the keywords a statement of a run of calls may start with (split_calls): an IF block's
+#: or a compact IF's, an IF block's end, GOTO
+BLOCK_WORDS = frozenset({"IF", "ENDIF", "GOTO"})
 
 # A call's name and its first argument when that is a value after whitespace (a
 # value may follow the name without any: `WaitTime.5;`, and is then left to the tail).
@@ -1047,8 +1053,12 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
             calls, compact = _compact_if(compact, calls[0]), None
         m = head(text, pos)
         name = m.group(1)
-        if len(name) in (2, 5) and name[0] in "IiEe":  # (no call has a keyword's name)
+        if len(name) in (2, 4, 5) and name[0] in "IiEeGg":  # (no call has a keyword's name)
             word = name.upper()  # one of BLOCK_WORDS, or a call's name
+            if word == "GOTO":
+                pos = find(";", m.end(1)) + 1
+                calls.append(s.Goto(base + m.start(1), base + pos, m.group(2)))
+                continue
             if word == "IF":
                 block = _head_splitters()["if"].match(text, m.start(1))
                 if block is None:  # no THEN: a compact IF, its statement next

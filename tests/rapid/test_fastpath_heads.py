@@ -235,11 +235,12 @@ def test_moves_inside_fast_heads_build_the_plain_model():
     "IF a = FALSE Foo;", "IF a.b. c Foo;", "IF a .b Foo;", "IF a\tFoo ;", "IF Ñ{1} = 1 Ö;",
     "IF (DInput(di1) = 1) AND NOT (n > f(g, 2)) x := (a + f(b)) * 2;",
     "IF a OR b MoveL Offs(p1,0,0,n),v100,z1,tool0;",
+    "IF 17>=nMotionStepCount{2} GOTO MoveArcEnd;", "IF a OR b goto\n x ;", "IF a GOTO IF;",
 ])
 def test_a_compact_if_of_a_call_is_a_statement_of_the_run(statement):
-    """`IF c <call>` (no THEN) is read in the run around it, its condition ended where
-    the grammar ends it (at the first operand that whitespace and a name follow), as
-    the CompactIf node the grammar builds."""
+    """`IF c <call>` or `IF c GOTO label;` (no THEN) is read in the run around it, its
+    condition ended where the grammar ends it (at the first operand that whitespace and
+    a name follow), as the CompactIf node the grammar builds."""
     text = routine("Stop;", statement, "Stop;")
     assert fast_tokens(text) == ["FAST_PROC", "FAST_CALLS"]
     tree = fast_parser().parse(text)
@@ -250,7 +251,7 @@ def test_a_compact_if_of_a_call_is_a_statement_of_the_run(statement):
 
 @pytest.mark.parametrize(("statement", "tokens"), [
     ("IF a RETURN;", ["FAST_CALLS", "FAST_RETURN", "FAST_CALLS"]),  # not a call
-    ("IF a OR b GOTO x;", ["FAST_CALLS", "FAST_CALLS"]),
+    ("IF a EXIT;", ["FAST_CALLS", "FAST_CALLS"]),
     ("IF a ! why\n Foo;", ["FAST_CALLS", "FAST_CALLS"]),  # a comment inside
     ("IF a = f(\\A?B) Foo;", ["FAST_CALLS", "FAST_CALLS"]),  # a conditional argument
 ])
@@ -258,6 +259,15 @@ def test_other_compact_ifs_keep_the_plain_tokens(statement, tokens):
     text = routine("Stop;", statement, "Stop;")
     assert shape(fast_parser().parse(text)) == plain_tree(text)
     assert fast_tokens(text) == ["FAST_PROC", *tokens]
+
+
+@pytest.mark.parametrize("statement", ["GOTO lRetry;", "goto lRetry ;", "GOTO\n  IF;", "Goto x;"])
+def test_a_goto_is_a_statement_of_the_run(statement):
+    text = routine("Stop;", "lRetry:", statement, "Stop;")
+    assert shape(fast_parser().parse(text)) == plain_tree(text)
+    assert fast_tokens(text) == ["FAST_PROC", "FAST_CALLS", "FAST_CALLS"]
+    assert [type(item) for item in fast_parser().parse(text).modules[0].items[0].body] == [
+        s.LazyCall, s.Label, s.Goto, s.LazyCall]
 
 
 def test_moves_in_compact_ifs_build_the_plain_model():
@@ -459,6 +469,8 @@ def test_a_run_holding_an_if_block_is_left_to_the_full_read_back():
     assert [c[0] for c in read_bulk(plain).calls] == ["MoveL", "MoveL"]
     assert read_bulk(routine("MoveL p1,v100,z1,tool0;",
                              "IF a THEN MoveL p2,v100,z1,tool0; ENDIF")) is None
+    assert read_bulk(routine("MoveL p1,v100,z1,tool0;", "IF a MoveL p2,v100,z1,tool0;")) is None
+    assert read_bulk(routine("MoveL p1,v100,z1,tool0;", "GOTO l;")) is None
 
 
 # ------------------------------------------------ arcs: the tail after the first target
