@@ -94,8 +94,8 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     numbers, signs), calls of such sums (two levels deep) and optional arguments; a value
     may also be a sum of such operands, function calls and parenthesised sums, or an
     aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
-    (two levels; three or four levels). `terminals` holds rapid.lark's regular expressions by
-    terminal name: the reader follows these."""
+    (two levels; three or four levels). `terminals` holds rapid.lark's regular
+    expressions by terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
     # (Lark gives the grammar's \r and \n as the characters themselves)
     string = STRING.replace(r"\r", "\r").replace(r"\n", "\n")

@@ -33,16 +33,19 @@ or conditional argument, calls nested deeper — ends the run, and that statemen
 parsed by the full grammar as before. A run also takes an IF block whose branch holds
 such calls only, written on the line of its THEN, `IF c THEN <calls> ENDIF` (no ELSE,
 nothing nested): hand-written cells guard moves and signals that way, and each such
-block cost the LALR parser three tokens and their reductions.
+block cost the LALR parser three tokens and their reductions. So it takes a compact IF
+of a call or a GOTO (`IF bOn Set do1;`, `IF n > 3 GOTO lDone;`), whose condition ends
+at the first operand that whitespace and a name follow, and a GOTO alone.
 
 More terminals take the head of a compound statement whole (head_patterns):
 `IF c THEN`, `ELSEIF c THEN`, `WHILE c DO`, `FOR v FROM a TO b [STEP s] DO`, `TEST e`,
 `CASE a, b:` and `RETURN [e];`. Their patterns only find where each condition ends (the
 fewest characters up to the next keyword, no comment, `;`, conditional or named argument
 or placeholder inside); fast_expressions' reader then reads it as rapid.lark's `expr`
-(relations, NOT, AND, OR, XOR), or gives up (NotFast). A procedure's head without
-parameters, `[LOCAL] PROC name()`, is one terminal too (a program of many small
-routines spent a Lark step on each of its words).
+(relations, NOT, AND, OR, XOR), or gives up (NotFast). A procedure's or function's
+head, `[LOCAL] PROC name(parameters)` or `[LOCAL] FUNC type name(parameters)`, is one
+terminal too (a program of many small routines spent a Lark step on each of its
+words), its parameters without alternatives (`\\a | b`) or placeholders.
 
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
@@ -238,7 +241,7 @@ def _keyword(words: str) -> str:
 
 
 # A routine's parameters, as rapid.lark's `parameters` takes them but for alternatives
-# (`\\a | b`) and placeholders: `[\\][VAR|PERS|INOUT] type name [{*, ...}]`, separated by
+# (`\a | b`) and placeholders: `[\][VAR|PERS|INOUT] type name [{*, ...}]`, separated by
 # commas (an optional one may follow without). The first word is the access keyword where
 # it is one (the only keywords the grammar takes there: checked by `_patterns`); any
 # word after it, or after the type, is a name.
@@ -271,7 +274,7 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
         "case": rf"(?i:CASE){_WORD_END}{c}:",
         "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
         # a procedure's head up to its body (`LOCAL PROC Path_10()`, `PROC Pick(robtarget
-        # p, \\switch Slow)`), a function's (`FUNC num Twice(num x)`)
+        # p, \switch Slow)`), a function's (`FUNC num Twice(num x)`)
         "proc": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:PROC){_WORD_END}"
                  rf"{WS}*{name}{WS}*\({WS}*{params}{WS}*\)"),
         "func": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:FUNC){_WORD_END}"
