@@ -202,7 +202,10 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
             rf"|{truth})|{paren}|{STRING})")
     group = rf"\[{WS}*{items(simple, _BRACKET, _BRACKET)}+\]"
     item = f"(?:{loose}|(?!{loose}){group}|{simple})"
-    aggregate = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
+    two_levels = rf"\[{WS}*{items(item, _BRACKET, _BRACKET)}+\]"
+    # and three levels: an array of records (`[[1,"S1",0.5,[10,20,30]], ...]`)
+    row = f"(?:{loose}|(?!{loose}){two_levels}|{simple})"
+    aggregate = rf"\[{WS}*{items(row, _BRACKET, _BRACKET)}+\]"
     # An aggregate of up to two levels whose items are sums of names and numbers
     # (`[[x0+nStep*2,y0,z0],[1,0,0,0],...]`, `[[rb.robax.rax_1, 0, ...],rb.extax]`,
     # `[vTcp*2,500,5000,1000]`), taken loosely as runs of their characters: checked token

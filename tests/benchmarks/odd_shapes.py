@@ -72,6 +72,8 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
                \\MaxTime:=(nWait * 2);`, `TPWrite "x=" + (NumToStr(n, 1) + " mm");`)
 - grids:       targets in two-dimensional arrays of 100 rows of 10, a row to a line,
                every move to one element (`MoveL grid3{17,4}, ...`)
+- record_tables: arrays of a RECORD type, a row (`[17,"S17",3.5,[2,1,0]]`) to a line,
+               four rows for each move
 - inline_data: declared targets whose numbers carry all the digits a double holds
                (`-149.50012345678901`, `0.2588190451025207`), moves with inline
                speeddata and zonedata aggregates, `\\T:=` times
@@ -97,7 +99,8 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "concurrent", "flips", "lone_cr", "arc_weld", "wrapped", "scoped", "hand_offs",
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
-              "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids")
+              "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
+              "record_tables")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -696,6 +699,18 @@ def _grids(n: int) -> list[str]:
     return [*out, *_parts(moves), "ENDMODULE"]
 
 
+def _record_tables(n: int) -> list[str]:
+    """A cell's data tables: arrays of a RECORD type (`[17,"S17",3.5,[2,1,0]]`) a row to a
+    line, a hundred rows to a table, four rows for each of the moves after them."""
+    rows = [f'[{k},"S{k}",{k % 50 + 0.5},[{k % 7},{k % 3},0]]' for k in range(4 * n)]
+    tables = [f"  CONST seam table{a // 100}{{{len(rows[a:a + 100])}}}:=[\n    "
+              + ",\n    ".join(rows[a:a + 100]) + "];" for a in range(0, len(rows), 100)]
+    moves = [f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;" for k in range(n)]
+    return [*_head("RecordTables"), "  RECORD seam", "    num id;", "    string name;",
+            "    num speed;", "    pos offset;", "  ENDRECORD", *tables, *_decls(n),
+            *_parts(moves), "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -713,7 +728,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "nested_calls": _nested_calls, "spaced_brackets": _spaced_brackets,
              "one_routine": _one_routine, "inline_data": _inline_data,
              "long_names": _long_names, "deep_calls": _deep_calls,
-             "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids}
+             "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
+             "record_tables": _record_tables}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -82,6 +82,8 @@ READ_FAST = [
     "Foo (a{1} + b.c), (TRUE), (NOT f(x) AND (y > 1)), ((1));",
     # NOT before parentheses is the operator, not a function (names may start with it)
     "Foo NOT (a), not(b AND c), Nothing(a), NOTE(1), notx (2);",
+    # aggregates three levels deep of strings, names and numbers (tables of records)
+    'Foo [[1,"a",[2,3]],[2, "b", [4,5]]], [[[1,2],[3]],[[4],[5,"x"]]], [[a+1,[b,TRUE]]];',
 ]
 
 ASSIGNMENTS = [
@@ -128,6 +130,7 @@ DECLARATIONS = module(
     "CONST robtarget p:=[[10-1,20+0*nStep,30],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     "CONST speeddata v:=[100+nStep*2,500,5000,1000];",
     "VAR bool b:=TRUE;", "PERS bool c{2}:=[TRUE, FALSE];", 'CONST string s:="x y";',
+    'CONST seam t{2}:=[[1,"S1",0.5,[10,20,30]],\n  [2,"S2",nStep,[1,2,3]]];',
 )
 
 

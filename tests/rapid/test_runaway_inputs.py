@@ -49,6 +49,7 @@ NEAR_MISSES = {
     "compact IF of a keyword": "IF " + " OR ".join(['(a{1} > f("x"))'] * N) + " GOTO ;",
     "compact IF without a statement": "IF " + " + ".join(["(f(1) + (a))"] * N) + " ;",
     "parentheses of calls": "Foo " + ",".join(["(f(1) + (a))"] * N) + " x;",
+    "a table of records": "VAR seam s{64}:=[" + ",".join(['[1,"a",[2,3]]'] * N) + "] x;",
     "two-dimensional aggregates": "VAR robtarget g{2,2}:=["
                                   + ",".join(["[[[1,2],[3]],[[4],[5]]]"] * N) + "] x;",
 }
@@ -80,7 +81,8 @@ def test_a_statement_the_fast_terminals_almost_take_is_refused_at_once(name, gua
 
 
 @pytest.mark.parametrize("name", ["options", "aggregates", "function calls", "compact IF",
-                                  "parentheses of calls", "two-dimensional aggregates"])
+                                  "parentheses of calls", "two-dimensional aggregates",
+                                  "a table of records"])
 def test_the_same_statements_when_valid_are_read_fast(name, guard):
     statement = NEAR_MISSES[name].replace(" x y;", ";").replace(" x;", ";")
     text = f"MODULE M\n  PROC main()\n    {statement}\n  ENDPROC\nENDMODULE\n"
