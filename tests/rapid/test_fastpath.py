@@ -496,6 +496,7 @@ DATA = [
     f"CONST robtarget g{{2,1}}:=[[{TARGET}],\n [{TARGET}]];",
     f"CONST robtarget h{{2,1}}:=[[{TARGET}], [[1,2,3]]];",
     "VAR num k{1,1,2}:=[[[[1,2]]]];",
+    'CONST seam t{2}:=[[1,"a",[2,x]],\n [2,"b;",[4,5]]];',
 ]
 GAPS = ["\n", " ", "\r\n  ", "\n! note\n", "\t", ""]
 
