@@ -249,6 +249,14 @@ def test_a_compact_if_of_a_call_is_a_statement_of_the_run(statement):
         s.LazyCall, s.CompactIf, s.LazyCall]
 
 
+def test_compact_ifs_are_split_with_the_lexers_own_pattern():
+    """split_calls reads the compact IF head's pattern from the cached grammar extension
+    (not working the patterns out again): it is the one the lexer's terminal holds."""
+    fastpath._compact_head.cache_clear()
+    pattern = fastpath._compact_head().pattern
+    assert pattern == fastpath._patterns()["compact_head"]
+
+
 @pytest.mark.parametrize(("statement", "tokens"), [
     ("IF a RETURN;", ["FAST_CALLS", "FAST_RETURN", "FAST_CALLS"]),  # not a call
     ("IF a EXIT;", ["FAST_CALLS", "FAST_CALLS"]),
