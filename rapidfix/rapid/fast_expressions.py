@@ -89,13 +89,15 @@ def expression_patterns(terminals: dict[str, str], value_name: str, plain_name: 
     argument or a declaration), `arguments` (a procedure call's argument list, without
     its name and ';'), `plain_arguments` (the common part of `arguments`: names,
     numbers, numeric aggregates, calls of a name and numbers), `selectors` (the
-    components and indices of an assignment's target after its name). A function
-    call's arguments are sums of operands (names with their components and indices,
-    numbers, signs), calls of such sums (two levels deep) and optional arguments; a value
-    may also be a sum of such operands, function calls and parenthesised sums, or an
-    aggregate of sums. `aggregates`: fastpath's loose patterns of numeric aggregates
-    (two levels; three or four levels). `terminals` holds rapid.lark's regular
-    expressions by terminal name: the reader follows these."""
+    components and indices of an assignment's target after its name), `condition` (a
+    head's condition, up to its keyword) and `compact_condition` (a compact IF's, up to
+    its statement). A function call's arguments are sums of operands (names with their
+    components and indices, numbers, signs), calls of such sums (two levels deep) and
+    optional arguments; a value may also be a sum of such operands, function calls and
+    parenthesised sums (calls and parentheses inside them one level deep), or an
+    aggregate of sums up to three levels. `aggregates`: fastpath's loose patterns of
+    numeric aggregates (two levels; three or four levels). `terminals` holds
+    rapid.lark's regular expressions by terminal name: the reader follows these."""
     spaces = {c for c in map(chr, range(256)) if re.fullmatch(terminals["WHITESPACE"], c)}
     # (Lark gives the grammar's \r and \n as the characters themselves)
     string = STRING.replace(r"\r", "\r").replace(r"\n", "\n")
