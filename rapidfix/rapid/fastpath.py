@@ -788,11 +788,8 @@ def _index_node(text: str, start: int) -> s.Index:
     name = text[:open_at].rstrip(_WS_CHARS)
     base = s.NameRef(start, start + len(name), sys.intern(name))
     inner = text[open_at + 1:-1]
-    if inner.isdigit() and inner.isascii():  # `path{12}`: one decimal index, as _value_node
-        at = start + open_at + 1
-        return s.Index(start, start + len(text), base,
-                       [s.Number(at, at + len(inner), float(inner), inner)])
-    if inner.replace(",", "").isdigit() and inner.isascii():  # `grid{12,3}`: decimals
+    # `path{12}`, `grid{12,3}`: decimals, read as _value_node reads them
+    if inner.replace(",", "").isdigit() and inner.isascii():
         numbers = []
         at = start + open_at + 1
         for digits in inner.split(","):
@@ -1471,24 +1468,21 @@ class FastSyntaxBuilder(SyntaxBuilder):
         return s.Return(head.start_pos, head.end_pos, value)
 
     def fast_proc(self, head: Token, *rest: Any) -> s.Routine:
-        # the plain rule's tokens, at the head's start (LOCAL? PROC NAME), its parameters
-        m = _head_splitters()["proc"].fullmatch(str(head))
-        local, name, params = m.groups()
-        start = head.start_pos
-        words = [Token("LOCAL", local, start_pos=start)] if local else []
-        words += [Token("PROC", "PROC", start_pos=start), Token("NAME", name)]
-        return self._routine("PROC", (*words, _parameters(params, start + m.start(3)),
-                                      *rest))
+        return self._fast_routine("PROC", head, rest)
 
     def fast_func(self, head: Token, *rest: Any) -> s.Routine:
-        m = _head_splitters()["func"].fullmatch(str(head))
-        local, type_name, name, params = m.groups()
+        return self._fast_routine("FUNC", head, rest)
+
+    def _fast_routine(self, kind: str, head: Token, rest: tuple) -> s.Routine:
+        """The routine of a head token of `kind`: the plain rule's tokens at the head's
+        start (LOCAL? PROC|FUNC, a function's type, the name), then its parameters."""
+        m = _head_splitters()[kind.lower()].fullmatch(str(head))
+        local, *names, params = m.groups()
         start = head.start_pos
         words = [Token("LOCAL", local, start_pos=start)] if local else []
-        words += [Token("FUNC", "FUNC", start_pos=start), Token("NAME", type_name),
-                  Token("NAME", name)]
-        return self._routine("FUNC", (*words, _parameters(params, start + m.start(4)),
-                                      *rest))
+        words += [Token(kind, kind, start_pos=start), *(Token("NAME", n) for n in names)]
+        at = start + m.start(len(names) + 2)
+        return self._routine(kind, (*words, _parameters(params, at), *rest))
 
 
 # One parameter of a checked head's list: the backslash of an optional one, the access
