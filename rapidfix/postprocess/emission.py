@@ -41,7 +41,7 @@ from rapidfix.postprocess.verify import Expected
 from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
 
 #: optional arguments left off the intermediate points of a subdivided move
-INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "id"})
+INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t"})
 INTERMEDIATE_ZONE = "z0"
 # where a name goes in a statement made once for several names (a program text with a
 # NUL, which the reader refuses in a file, takes the statements one by one)
@@ -505,8 +505,8 @@ class _Emitter:
         it drops) all stands after the target, so moves of one instruction with the same
         shape have the same parts: a program's thousands of arcs cost one variant each
         distinct speed, zone and tool combination, and their operands are not made. (The
-        shape holds the statement's whole text but the target's, so an argument dropped
-        before the target, `MoveL \\ID:=3, p1, ...`, is dropped the same way for all.)"""
+        shape holds the statement's whole text but the target's, so moves that differ
+        before their target, `MoveL \\Conc, p1, ...` and `MoveL p1, ...`, have their own.)"""
         key = None if shape is None else (site.motion.syntax.name, *shape)
         parts = self.variant_parts.get(key) if key is not None else None
         if parts is None:

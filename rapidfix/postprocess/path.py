@@ -325,7 +325,7 @@ def _stalled(seg: np.ndarray, dev: np.ndarray, worst: np.ndarray,
 def refine(
     curves: Curves, q_ideal: tuple[np.ndarray, np.ndarray], q_cmd: tuple[np.ndarray, np.ndarray],
     tolerance: float, predict: Predict, solve: Solve, bound: np.ndarray | None = None,
-    given_up: np.ndarray | None = None,
+    given_up: np.ndarray | None = None, unsplit: np.ndarray | None = None,
 ) -> Refinement:
     """Intermediate points that keep every segment within `tolerance` mm of its curve.
 
@@ -333,7 +333,8 @@ def refine(
     an upper bound of each segment's deviation where one is known (inf elsewhere):
     segments it keeps below SCREEN × tolerance are not sampled, and the bound stands
     as their deviation. `given_up` (M,) bool: segments known not to close (failed at
-    once, not sampled).
+    once, not sampled). `unsplit` (M,) bool: segments that may take no point (failed
+    where they would need one).
     """
     m = curves.start.shape[0]
     seg = np.arange(m)
@@ -361,6 +362,9 @@ def refine(
             break
         dev = interval_deviation(curves, seg, qc0, qc1, predict, SCREEN * tolerance)
         bad = (dev > target) & ~failed[seg]
+        if unsplit is not None and bad.any():
+            failed[seg[bad & unsplit[seg]]] = True
+            bad &= ~failed[seg]
         if bad.any():
             failed |= _stalled(seg[bad], dev[bad], worst, stalled)
             bad &= ~failed[seg]

@@ -96,7 +96,9 @@ def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targe
                    ) -> tuple[Plan | None, dict[int, np.ndarray], np.ndarray] | None:
     """Every joint with play reaches a compensated MoveJ fine point moving up (down
     where its lower limit is too close): compensate those rows in that direction.
-    A MoveL or MoveC keeps its path: its joints arrive the way the path takes them.
+    A MoveL or MoveC keeps its path: its joints arrive the way the path takes them. A
+    synchronized move (`\\ID`) takes no approach point: the other tasks of its MultiMove
+    program would have to take one too.
 
     Returns (plan, site -> direction, margin), the plan None when no site qualifies;
     None when no joint has play."""
@@ -105,8 +107,8 @@ def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targe
     if not np.any(play > 0):
         return None
     margin = np.where(play > 0, 2.0 * play + APPROACH_EXTRA_RAD, 0.0)
-    chosen = [i for i, site in enumerate(sites)
-              if site.rows and site.kind == "J" and is_fine(program, site.motion)]
+    chosen = [i for i, site in enumerate(sites) if site.rows and site.kind == "J"
+              and not site.synchronized and is_fine(program, site.motion)]
     if not chosen:
         return None, {}, margin
     rows = np.array([sites[i].rows[-1] for i in chosen], dtype=np.int64)

@@ -41,6 +41,11 @@ OFF_START = ("it starts where the MoveAbsJ before it leaves the robot, farther f
              "path than the path tolerance")
 
 
+#: why a synchronized MoveL/MoveC kept its instruction where its path needs points
+SYNCHRONIZED = ("a synchronized move (\\ID) whose path would need intermediate points, "
+                "which the other tasks of its MultiMove program would have to take too")
+
+
 @dataclass(frozen=True)
 class PathRefinement:
     """The refined paths of the moves that become joint moves, and what they changed.
@@ -227,13 +232,16 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     if absj:
         rows = absj_rows
         off[rows] = curves.distance(rows, predict(rows, q0c[rows])) > path_tolerance_mm
+    unsplit = np.fromiter((sites[i].synchronized for i in segs), bool, len(segs))
     points = refine(curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
-                    path_tolerance_mm, predict, solve, bound, given_up=off)
+                    path_tolerance_mm, predict, solve, bound, given_up=off,
+                    unsplit=unsplit if unsplit.any() else None)
     for k in np.flatnonzero(points.failed):
         mode[segs[k]] = "filtered"
         filtered_reason[segs[k]] = (
             "its arc is degenerate" if curves.degenerate[k] else
             f"{OFF_START} {path_tolerance_mm:g} mm" if off[k] else
+            SYNCHRONIZED if unsplit[k] else
             "no intermediate points keep its path within the path tolerance "
             f"{path_tolerance_mm:g} mm")
     solved, direction = p, None

@@ -45,6 +45,9 @@ class Site:
     reason: str | None = None
     index: int = -1
     kept: str | None = None
+    #: a synchronized move of a MultiMove program (`\\ID`): its program's other tasks run
+    #: the same moves, so it takes no intermediate nor approach points
+    synchronized: bool = False
 
     @property
     def where(self) -> str:
@@ -317,13 +320,14 @@ def _site_values(operands: list[Operand], outside: Declarations) -> list[tuple] 
     return values
 
 
-def _around_targets(motion: MotionInstruction) -> tuple[str | None, tuple]:
-    """(why MoveAbsJ cannot take an optional argument or None, what decides the frames)."""
+def _around_targets(motion: MotionInstruction) -> tuple[str | None, tuple, bool]:
+    """(why MoveAbsJ cannot take an optional argument or None, what decides the frames,
+    whether it is a synchronized move)."""
     optional = motion.optional
     key = (_operand_key(motion.arguments.get("tool")),
            _operand_key(optional.get("wobj") if optional else None),
            _operand_key(optional.get("tload") if optional else None))
-    return (_optional_reason(motion) if optional else None), key
+    return (_optional_reason(motion) if optional else None), key, "id" in optional
 
 
 def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Site], Targets]:
@@ -344,7 +348,8 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
     frames = _FrameCache(outside)
     kinds: dict[str, tuple[bool, str, str | None]] = {}
     frame_sets: dict[tuple, tuple[_Frames | str, int]] = {}
-    # per shared tail: [why MoveAbsJ cannot take an option, frame key, frame set or None]
+    # per shared tail: [why MoveAbsJ cannot take an option, frame key, frame set or None,
+    # synchronized]
     by_tail: dict[Any, list] = {}
     joint = emit == "jointtargets"
     deferred = False  # rows whose quaternion is checked on the arrays
@@ -362,7 +367,8 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         shared = motion.shared
         around = by_tail.get(shared) if shared is not None else None
         if around is None:
-            around = [*_around_targets(motion), None]
+            reason, frame_key, synchronized = _around_targets(motion)
+            around = [reason, frame_key, None, synchronized]
             if shared is not None:
                 by_tail[shared] = around
         if kept is None and joint:
@@ -380,13 +386,14 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
                     and operand.type_name == "robtarget":
                 row = len(values)
                 row_site.append(len(sites))
-                sites.append(Site(motion, kind, site_ops, [row], None, index, kept))
+                sites.append(Site(motion, kind, site_ops, [row], None, index, kept,
+                                  around[3]))
                 values.append(operand.value)  # the raw tuple, shape-checked by the RAPID layer
                 operands.append(operand)
                 row_set.append(set_index)
                 deferred = True
                 continue
-        site = Site(motion, kind, site_ops, [], None, index, kept)
+        site = Site(motion, kind, site_ops, [], None, index, kept, around[3])
         sites.append(site)
         found = _site_values(site_ops, outside)
         if isinstance(found, str):

@@ -100,7 +100,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
               "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
-              "record_tables")
+              "record_tables", "multimove")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -711,6 +711,26 @@ def _record_tables(n: int) -> list[str]:
             *_parts(moves), "ENDMODULE"]
 
 
+def _multimove(n: int) -> list[str]:
+    """A MultiMove task's coordinated program: every move numbered with `\\ID:=` (ten
+    apart, as RobotStudio writes them), some arcs and joint moves among them, between
+    SyncMoveOn and SyncMoveOff."""
+    moves = ["    SyncMoveOn sync1, tasks;"]
+    for k in range(n):
+        number = f"\\ID:={10 * k + 10}"
+        if k % 5 == 4:
+            moves.append(f"    MoveC {number}, Offs(p{k},-0.25,0.3,0), p{k}, v100, z1, "
+                         "tMill\\WObj:=wPlate;")
+        elif k % 7 == 0:
+            moves.append(f"    MoveJ {number}, p{k}, v500, z10, tMill\\WObj:=wPlate;")
+        else:
+            moves.append(f"    MoveL {number}, p{k}, v100, z1, tMill\\WObj:=wPlate;")
+    moves.append("    SyncMoveOff sync2;")
+    return [*_head("Coordinated"), '  PERS tasks tasks{2}:=[["T_ROB1"],["T_ROB2"]];',
+            "  VAR syncident sync1;", "  VAR syncident sync2;", *_decls(n),
+            "  PROC Coordinated()", *moves, "  ENDPROC", "ENDMODULE"]
+
+
 #: the line ending a shape's lines are joined with, where it is not LF
 _NEWLINES = {"lone_cr": "\r"}
 
@@ -729,7 +749,7 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "one_routine": _one_routine, "inline_data": _inline_data,
              "long_names": _long_names, "deep_calls": _deep_calls,
              "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
-             "record_tables": _record_tables}
+             "record_tables": _record_tables, "multimove": _multimove}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:

@@ -290,11 +290,12 @@ def test_moves_emitted_in_columns_give_what_the_move_by_move_route_gives(monkeyp
     assert columns.data == one_by_one.data
     assert one_by_one.moves_compensated == columns.moves_compensated
     if name == "arcs" and emit == "jointtargets":  # every variant got intermediate points
+        # but the synchronized one (`\\ID`), which kept its MoveC
         out = columns.data.decode()
         assert columns.points_added > 50
         for shown in ["MoveAbsJ \\Conc, jt_", "_1, vFeed, z0, tMill", "_1, vFeed, z0 , tMill",
                       "_1, vFeed , z0, tMill", "_1, vFeed, ! zone next\n      z0,",
-                      "_1, vFeed,z0 , tMill", "MoveAbsJ \\Conc \\ID:=7, jt_",
+                      "_1, vFeed,z0 , tMill", "MoveC \\Conc \\ID:=7, ft_",
                       "MoveAbsJ \\T:=2 \\Conc, jt_"]:
             assert shown in out, shown
     assert one_by_one.worst_predicted_mm == columns.worst_predicted_mm

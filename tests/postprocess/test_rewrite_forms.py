@@ -20,10 +20,6 @@ OPTIONAL = [
         "MoveL \\Conc, pBB01, v50\\V:=60, fine\\Inpos:=inpos20, tBallbar\\WObj:=wobjBallbar;",
         "MoveAbsJ \\Conc, jt_pBB01, v50\\V:=60, fine\\Inpos:=inpos20, tBallbar\\WObj:=wobjBallbar;",
     ),
-    (
-        "MoveL pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar\\TLoad:=load0;",
-        "MoveAbsJ jt_pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar\\TLoad:=load0;",
-    ),
 ]
 
 
@@ -32,18 +28,42 @@ def test_optional_arguments_are_kept(comp, line, expected):
     text = ballbar_program().replace(
         "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar;", line, 1
     )
-    if "idMove" in line:
-        text = text.replace("    PROC main()", "    VAR syncident idMove;\n    PROC main()", 1)
     result = rewrite_source(text.encode(), "opt.mod", comp, RewriteOptions(path_tolerance_mm=0.05))
     out = result.data.decode()
     assert expected in out
     assert not result.skipped
-    # intermediate points of this move, if any, drop \T, \Z, \Inpos and \ID and fly by in z0
+    # intermediate points of this move, if any, drop \T, \Z and \Inpos and fly by in z0
     for statement in out.splitlines():
         if "jt_pBB01_" in statement and "MoveAbsJ" in statement:
             assert "\\T:=" not in statement and "\\Z:=" not in statement
-            assert "\\Inpos" not in statement and "\\ID" not in statement
+            assert "\\Inpos" not in statement
             assert ", z0, tBallbar" in statement
+
+
+def test_a_synchronized_move_keeps_its_number_and_takes_no_intermediate_points(comp):
+    """`\\ID` numbers a move of a MultiMove program's synchronized mode, whose other tasks
+    run moves of the same numbers: a MoveAbsJ keeps the number where the joint path stays
+    within the tolerance without points; where it would need some, the move stays a MoveL
+    (its robtarget filtered) and says why."""
+    from rapidfix.postprocess.refinement import SYNCHRONIZED
+
+    line = "MoveL pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar\\TLoad:=load0;"
+    text = ballbar_program().replace(
+        "MoveL pBB01, v50, fine, tBallbar\\WObj:=wobjBallbar;", line, 1
+    ).replace("    PROC main()", "    VAR identno idMove := 10;\n    PROC main()", 1)
+    loose = rewrite_source(text.encode(), "opt.mod", comp, RewriteOptions(path_tolerance_mm=0.5))
+    assert ("MoveAbsJ jt_pBB01\\ID:=idMove, v50, z1, tBallbar\\WObj:=wobjBallbar"
+            "\\TLoad:=load0;") in loose.data.decode()
+    assert "jt_pBB01_" not in loose.data.decode() and not loose.filtered_reasons
+    tight = rewrite_source(text.encode(), "opt.mod", comp, RewriteOptions(path_tolerance_mm=0.05))
+    out = tight.data.decode()
+    assert line in out and "jt_pBB01" not in out and not tight.skipped
+    assert tight.filtered_reasons == {SYNCHRONIZED: 1}
+    assert tight.moves_total == loose.moves_total
+    # the same move unnumbered takes the points
+    plain = rewrite_source(text.replace("\\ID:=idMove", "").encode(), "opt.mod", comp,
+                           RewriteOptions(path_tolerance_mm=0.05))
+    assert "MoveAbsJ jt_pBB01_1," in plain.data.decode() and not plain.filtered_reasons
 
 
 def test_corr_has_no_joint_form_and_keeps_its_move_with_a_filtered_robtarget(comp):

@@ -253,3 +253,41 @@ def test_the_line_bound_in_blocks_of_segments_gives_the_same_rewrite(comp, name,
         result = rewrite_source(data, name, comp, RewriteOptions())
         assert result.data == whole.data and result.points_added == whole.points_added
         assert sum(calls) == segments[0] and max(calls) <= size
+
+
+def _multimove_moves(text: str) -> list[tuple[str, str]]:
+    """(instruction, `\\ID` number) of each move statement of a program, in order."""
+    return re.findall(r"\n\s*(Move\w*)\s*\\ID:=(\d+)\s*,", text)
+
+
+@pytest.mark.parametrize("approach", [False, True])
+def test_synchronized_moves_keep_their_numbers_and_take_no_points(approach):
+    """A MultiMove program's coordinated moves (`MoveL \\ID:=10, p, ...`): its other tasks
+    run moves of the same numbers, so the rewrite adds none and drops none. An arc whose
+    path would need intermediate points keeps its MoveC with filtered robtargets, and a
+    fine MoveJ takes no approach point; every move keeps its number, in order. Without
+    the numbers, the same arcs and fine points do take points."""
+    from odd_shapes import odd_program
+
+    from rapidfix.postprocess.refinement import SYNCHRONIZED
+
+    comp = _backlash_comp()
+    text = odd_program("multimove", 300).replace("v500, z10", "v500, fine")
+    options = RewriteOptions(approach=approach)
+    result = rewrite_source(text.encode(), "coordinated.mod", comp, options)
+    out = result.data.decode()
+    before, after = _multimove_moves(text), _multimove_moves(out)
+    assert [number for _, number in after] == [number for _, number in before]
+    assert len(after) == len(before) == result.moves_total
+    assert result.points_added == 0
+    assert not re.search(r"MoveAbsJ\s*,", out) and "_app" not in out
+    arcs = sum(name == "MoveC" for name, _ in before)
+    assert arcs and result.filtered_reasons == {SYNCHRONIZED: arcs}
+    assert sum(name == "MoveC" for name, _ in after) == arcs
+    assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
+    # the same program unnumbered: its arcs take intermediate points, its fine MoveJ
+    # approach points
+    plain = re.sub(r"\\ID:=\d+, ", "", text)
+    unnumbered = rewrite_source(plain.encode(), "plain.mod", comp, options)
+    assert unnumbered.points_added > 0 and SYNCHRONIZED not in unnumbered.filtered_reasons
+    assert ("_app" in unnumbered.data.decode()) == approach
