@@ -29,6 +29,7 @@ from rapidfix.postprocess.reparse_changes import CheckUnits
 from rapidfix.rapid import (
     MotionInstruction,
     ReadBack,
+    one_per_shape,
     parse_program,
     read_jointtarget_declarations,
     read_robtarget_declarations,
@@ -205,7 +206,7 @@ def _read_columns(units: CheckUnits, expected: Expected, filename: str) -> ReadB
         if None in found:
             return None
         where[joint_idents] = found
-    if slots and is_joint.any() and not _templates_move_to_their_name(dict.fromkeys(
+    if slots and is_joint.any() and not _templates_move_to_their_name(one_per_shape(
             map(itemgetter(0, 2), filter(None, slots)))):
         return None
     targets = None
@@ -319,7 +320,7 @@ def _robtarget_targets(units: CheckUnits, motion: np.ndarray, slot: np.ndarray,
         scope_rows[~inline] = rows
         found.append(scope_rows)
         total += len(flat)
-    if not _templates_read_their_robtargets(dict.fromkeys(
+    if not _templates_read_their_robtargets(one_per_shape(
             texts[0::2] for texts in target_slots if texts is not None)):
         return None
     trans, rot, conf = values

@@ -46,6 +46,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     )
     from rapidfix.rapid.readback import (
         ReadBack,
+        one_per_shape,
         read_jointtarget_declarations,
         read_robtarget_declarations,
         read_robtarget_literals,
@@ -91,6 +92,7 @@ LAZY_EXPORTS = {
     "format_string": "format",
     "format_tooldata": "format",
     "format_value": "format",
+    "one_per_shape": "readback",
     "placeholders_in": "syntax_errors",
     "read_jointtarget_declarations": "readback",
     "read_robtarget_declarations": "readback",
@@ -144,6 +146,7 @@ __all__ = [
     "format_value",
     "load_program",
     "motion_spec",
+    "one_per_shape",
     "parse_owned",
     "parse_program",
     "placeholders_in",

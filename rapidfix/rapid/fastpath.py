@@ -528,20 +528,33 @@ def _inner_tail(text: str) -> CallTail:
     """The CallTail of a function call's arguments after its first, read once per
     distinct text; a text new but of a known shape (its digits aside: `,p7.trans.x*0,0)`
     after `,p6.trans.x*0,0)`) is the known one's with the values that differ read again."""
-    tail = _INNER_TAILS.get(text)
+    return _tail_by_shape(text, _INNER_TAILS, _TAIL_SHAPES, _INNER_PIECE)
+
+
+def _lead(text: str) -> CallTail:
+    """The CallTail of the optional arguments before a call's first required one, read as
+    `_inner_tail` reads its text: `\\ID:=11, ` after `\\ID:=10, ` (a MultiMove program
+    numbers every move) is the known lead with its number read again."""
+    return _tail_by_shape(text, _LEADS, _LEAD_SHAPES, CALL_PIECE)
+
+
+def _tail_by_shape(text: str, texts: Memo, shapes: Memo, pieces: LazyPattern) -> CallTail:
+    """The CallTail of `text` split by `pieces`, kept in `texts` by text and in `shapes`
+    by the text's shape (`shape_key`)."""
+    tail = texts.get(text)
     if tail is None:
-        key = _shape_key(text)
+        key = shape_key(text)
         if key is not None:
-            known = _TAIL_SHAPES.get(key)
+            known = shapes.get(key)
             if known is not None:
                 tail = known[1].reshaped(known[0], text)
                 if tail is None:  # an option named with a digit: read in full
                     key = None
         if tail is None:
-            tail = CallTail(text, _INNER_PIECE)
+            tail = CallTail(text, pieces)
             if key is not None:
-                _TAIL_SHAPES.keep(key, (text, tail))
-        _INNER_TAILS.keep(text, tail)
+                shapes.keep(key, (text, tail))
+        texts.keep(text, tail)
     return tail
 
 
@@ -656,7 +669,7 @@ _ONES = bytes.maketrans(b"0123456789", b"1111111111")
 _RADIX = re.compile(r"0[xXbBoO]").search
 
 
-def _shape_key(text: str) -> bytes | None:
+def shape_key(text: str) -> bytes | None:
     """`text` with every digit made a 1, or None where its digits decide how it is read
     (after a radix prefix, in a string)."""
     if '"' in text or _RADIX(text) is not None:
@@ -677,7 +690,7 @@ def _read_by_shape(text: str, start: int) -> s.Expr:
     from one read before are that one's nodes at the new place, with the numbers and
     names taken from the new text (_reshaped): a program's expressions often differ only
     in the target they name or the numbers they hold. NotRead as read_expression."""
-    key = _shape_key(text)
+    key = shape_key(text)
     if key is not None:
         shape = _SHAPES.get(key)
         if shape is not None:
@@ -1020,8 +1033,10 @@ _READ: Memo = Memo(TAIL_LIMIT)
 # The shape of an expression text (its digits made 1s) -> its nodes and where the text
 # stood (see _read_by_shape), or None for a shape whose nodes are read in full.
 _SHAPES: Memo = Memo(TAIL_LIMIT)
-# The optional arguments before a call's first required one (see split_calls).
+# The optional arguments before a call's first required one (see split_calls), by text
+# and by shape.
 _LEADS: Memo = Memo(TAIL_LIMIT)
+_LEAD_SHAPES: Memo = Memo(TAIL_LIMIT)
 # The argument values of tails, read once per distinct text (see _value_entry).
 _ENTRIES: Memo = Memo(4 * TAIL_LIMIT)
 # What follows an aggregate's first group -> the aggregate read with a stand-in first
@@ -1103,11 +1118,7 @@ def split_calls(text: str, base: int) -> list[s.Statement]:
             if first is not None and piece.start(4) > tail_at:
                 # the switches before the first required value are a lead read once,
                 # the value is the call's own, and the rest a tail as after any head
-                lead_text = text[tail_at:piece.start(4)]
-                lead = _LEADS.get(lead_text)
-                if lead is None:
-                    lead = CallTail(lead_text)
-                    _LEADS.keep(lead_text, lead)
+                lead = _lead(text[tail_at:piece.start(4)])
                 at = base + piece.start(4)
                 node = _head_node(first, at)
                 head_arg = argument(at, node.end, "required", None, node)
@@ -1418,8 +1429,8 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _LEADS, _ENTRIES,
-                 _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _LEADS, _LEAD_SHAPES,
+                 _ENTRIES, _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

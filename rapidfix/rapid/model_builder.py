@@ -85,12 +85,14 @@ class _SharedTail:
     __slots__ = ("entries", "head_keys", "head_of_target", "target_of_head")
 
     def __init__(self, head_keys: tuple[str, ...], target_keys: tuple[str, ...],
-                 entries: tuple[tuple[bool, str, Operand], ...]) -> None:
+                 entries: tuple[tuple[bool, str, Operand | None], ...]) -> None:
         self.head_keys = head_keys  # the parameter of each leading argument (a target)
         order = [key for key in target_keys if key in head_keys]
         self.target_of_head = tuple(order.index(key) for key in head_keys)
         self.head_of_target = tuple(head_keys.index(key) for key in order)
-        self.entries = entries  # per tail argument: (optional, key, operand of the first call)
+        # per tail argument: (optional, key, operand of the first call, or None where
+        # each call has its own number)
+        self.entries = entries
 
     def operands(self, motion: MotionInstruction) -> tuple[dict[str, Operand],
                                                           dict[str, Operand]]:
@@ -98,10 +100,37 @@ class _SharedTail:
         arguments = {key: targets[i] for key, i in zip(self.head_keys, self.target_of_head)}
         optional: dict[str, Operand] = {}
         for (is_optional, key, first), arg in zip(self.entries, motion.syntax.shared_args()):
+            if first is None:  # a number of the call's own (`_own_number`)
+                (optional if is_optional else arguments)[key] = Operand(
+                    arg, motion.source, None, "expression", None, "num", arg.value.value,
+                    True, None, None)
+                continue
             (optional if is_optional else arguments)[key] = Operand(
                 arg, first.source, first.given_text, first.form, first.name, first.type_name,
                 first.value, first.static, first.reason, first.declaration)
         return arguments, optional
+
+
+def _own_number(kind: str, option: str | None, node: s.Expr | None) -> bool:
+    """Whether an argument is an optional one whose value is a number literal and whose
+    parameter takes no data of a role (`\\ID:=10`, `\\V:=120`): its operand is the
+    number's own (what `ModelBuilder._operand` makes of it), so calls that differ there
+    can share the rest."""
+    return (kind == "optional" and type(node) is s.Number
+            and _ROLE_TYPES.get(option.lower() if option else "") is None)
+
+
+def _lead_key(lead: s.ArgumentTail) -> object:
+    """What the operands of a call's lead (its optional arguments before its target)
+    depend on: the lead itself, or, where its only values are numbers of its own
+    (`MoveL \\ID:=10, p10, ...`: a MultiMove program numbers every move), the names of
+    its arguments."""
+    values = lead.values()
+    if not all(node is None or _own_number(kind, option, node)
+               for kind, option, node in values):
+        return id(lead)
+    return tuple((kind, option.lower() if option else None, node is None)
+                 for kind, option, node in values)
 
 
 def _root_name(expr: s.Expr | None) -> s.NameRef | None:
@@ -607,7 +636,8 @@ class ModelBuilder:
                 index += 1
                 entries.append((False, key, arguments[key]))
             else:
-                entries.append((True, arg.key, optional[arg.key]))
+                entries.append((True, arg.key, None if _own_number(
+                    arg.kind, arg.name, arg.value) else optional[arg.key]))
         return _SharedTail(tuple(layout[i][0] for i in range(n_heads)), spec.target_keys,
                            tuple(entries))
 
@@ -675,6 +705,7 @@ class ModelBuilder:
                       tuple[_Layout, dict[object, _SharedTail | tuple | None]]] = {}
         motions: list[MotionInstruction] = []
         last: tuple = (None, None, None)  # consecutive moves mostly share these
+        lead_keys: dict[int, object] = {}  # id(call lead) -> _lead_key of it
         pending = self.pending
         for index, (call, spec, module, routine, in_loop) in enumerate(pending):
             pending[index] = None  # its memory is the motion's to use
@@ -700,8 +731,12 @@ class ModelBuilder:
                 head = call.head
                 # (the same tail after one leading argument, after two, or after a lead
                 # of switches is shared apart)
-                if call.lead is not None:
-                    tail = (id(call.tail), id(call.lead))
+                lead = call.lead
+                if lead is not None:
+                    lead_key = lead_keys.get(id(lead))
+                    if lead_key is None:
+                        lead_key = lead_keys[id(lead)] = _lead_key(lead)
+                    tail = (id(call.tail), lead_key)
                 elif call.second is not None:
                     tail = (id(call.tail), 2)
                 else:

@@ -32,6 +32,7 @@ import bisect
 import functools
 import re
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -56,6 +57,7 @@ from rapidfix.rapid.fastpath import (
     blank_comments,
     cached_extension,
     declaration_pattern,
+    shape_key,
 )
 from rapidfix.rapid.grammar import grammar_text
 from rapidfix.rapid.instructions import motion_spec
@@ -140,17 +142,26 @@ class BulkProgram:
         tails = self._tails
         parsed = tails.get(rest)
         if parsed is None:
-            head = CALL_PIECE.compiled.search(rest)
+            piece = CALL_PIECE.compiled
+            head = piece.search(rest)
+            lead: dict[str, str | None] = {}
+            while head is not None and head.group(1) is not None:
+                # optional arguments before the first value (`MoveAbsJ \ID:=10, j1, ...`):
+                # read on each call (a MultiMove program numbers every move)
+                lead[head.group(2).lower()] = head.group(3)
+                head = piece.match(rest, head.end())
             if head is not None and head.group(4) is not None:
                 after = rest[head.end():]
                 later = tails.get(after)
                 if later is None:
                     later = _tail_arguments(after)
                     tails.keep(after, later)
-                parsed = ((head.group(4), *later[0]), later[1])
+                parsed = ((head.group(4), *later[0]), {**lead, **later[1]} if lead
+                          else later[1])
             else:
                 parsed = _tail_arguments(rest)
-            tails.keep(rest, parsed)
+            if first or not lead:
+                tails.keep(rest, parsed)
         return ((first, *parsed[0]) if first else parsed[0]), parsed[1]
 
     def visible(self, module: str, routine: str) -> tuple[dict, dict]:
@@ -378,8 +389,14 @@ def _jointtargets_named_first(bulk: BulkProgram, call_of_row: list[int], slot: n
     scope. None when that is not so (the general loop decides)."""
     calls = bulk.calls
     rows = [calls[c] for c in call_of_row]
-    if slot.any() or not all(first for _, first, _ in rows):
+    if slot.any():
         return None
+    if not all(first for _, first, _ in rows):  # (optional arguments before it: its first
+        # value from the call's arguments)
+        rows = [row if row[1] else (row[0], (bulk.arguments(c)[0] or ("",))[0], row[2])
+                for row, c in zip(rows, call_of_row)]
+        if not all(first for _, first, _ in rows):
+            return None
     for name in {name for name, _, _ in rows}:
         spec = motion_spec(name)
         if spec is None or spec.target_kind != "jointtarget" or not spec.target_parameters \
@@ -597,6 +614,28 @@ def _numbers(group: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+# A call's name at the start of the text before its first target.
+_CALL_NAME = re.compile(rf"{WS}*({NAME})")
+
+
+def one_per_shape(templates: Iterable[tuple[str, ...]]) -> dict[tuple[str, ...], None]:
+    """One of each group of statement templates (the texts around a call's targets) that
+    differ only in their digits, the call's name aside. Digits stand in numbers and
+    names, whose tokens another digit keeps as they are, so the templates of a group
+    name the same instruction and place its targets alike (`MoveAbsJ \\ID:=11, ` and
+    `MoveAbsJ \\ID:=12, `: a MultiMove program numbers every move). A template holding a
+    string, a radix prefix or a comment is a group of its own (`shape_key`)."""
+    kept: dict[tuple, tuple[str, ...]] = {}
+    for texts in templates:
+        keys = tuple(map(shape_key, texts))
+        name = _CALL_NAME.match(texts[0]) if texts else None
+        if None in keys or name is None or any("!" in text for text in texts):
+            kept.setdefault(texts, texts)
+        else:
+            kept.setdefault((name.group(1), keys), texts)
+    return dict.fromkeys(kept.values())
 
 
 def read_targets_full(motions: list[MotionInstruction], motion: np.ndarray,

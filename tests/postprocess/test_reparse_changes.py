@@ -147,7 +147,7 @@ def test_the_bulk_reader_reads_scopes_and_arguments():
 
 
 _ARGUMENTS = ["p1", "p2", "[[1,2,3],[1,0,0,0],[0,0,0,0],[0,0,0,0,0,0]]", "v100", "z1",
-              "tool0", "\\WObj:=w", "\\Conc", "\\V:=120", "-1", "fine"]
+              "tool0", "\\WObj:=w", "\\Conc", "\\V:=120", "-1", "fine", "\\ID:=17"]
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -452,6 +452,42 @@ def test_a_rewrite_that_writes_a_wrong_digit_or_one_name_twice_writes_nothing(
     with pytest.raises(RapidSemanticError, match="twice"):
         rewrite_file(source, out, comp, RewriteOptions())
     assert not out.exists()
+
+
+def test_statement_templates_that_differ_in_their_digits_are_read_once():
+    from rapidfix.rapid import one_per_shape
+
+    templates = [("    MoveAbsJ \\ID:=11, ", ", v100, z1, tool0;"),
+                 ("    MoveAbsJ \\ID:=12, ", ", v100, z1, tool0;"),
+                 ("    MoveAbsJ \\ID:=13, ", ", v200, z1, tool0;"),  # the same shape
+                 ("    MoveAbsJ \\ID:=140, ", ", v100, z1, tool0;"),
+                 ("    MoveL1 \\ID:=11, ", ", v100, z1, tool0;"),  # another call's name
+                 ("    MoveL2 \\ID:=11, ", ", v100, z1, tool0;"),
+                 ("    MoveAbsJ \\ID:=11, ", ", v100, z1, tool0; ! 1"),  # a comment
+                 ("    MoveAbsJ \\ID:=11, ", ", v100, z1, tool0; ! 2"),
+                 ('    Foo "1", ', ";"), ('    Foo "2", ', ";"),  # strings
+                 ("    Foo 0x1, ", ";"), ("    Foo 0x2, ", ";")]  # radix prefixes
+    assert list(one_per_shape(templates)) == [templates[n] for n in (0, 3, 4, 5, 6, 7, 8, 9,
+                                                                       10, 11)]
+
+
+def test_a_multimove_program_is_read_back_in_columns_once_per_statement_shape(
+        monkeypatch, comp):
+    # every move numbered (`\\ID:=10`, `\\ID:=20`, ...): its statements are read back
+    # through a few templates, not one each
+    parsed = []
+    real = verify_module.read_targets_in_bulk
+
+    def spy(text, *args):
+        parsed.append(text)
+        return real(text, *args)
+
+    monkeypatch.setattr(verify_module, "read_targets_in_bulk", spy)
+    text = odd_program("multimove", 900)
+    result = rewrite_source(text.encode(), "coordinated.mod", comp, RewriteOptions())
+    assert result.moves_compensated == result.moves_total > 200
+    assert parsed and sum(text.count("MoveAbsJ") for text in parsed) < 30
+    assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
 
 
 def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(

@@ -55,16 +55,25 @@ def assert_same_model(text: str) -> Program:
     for motion in fast.motions:  # the targets are the very operands of the arguments
         args = motion.arguments
         assert all(any(t is a for a in args.values()) for t in motion.targets)
-    # moves with the same shared tail have equal operands besides their targets
+    # moves with the same shared tail have equal operands besides their targets and the
+    # numbers each has of its own (`\\ID:=10`: their text and value)
     seen: dict[int, tuple] = {}
     for motion in fast.motions:
         if motion.shared is None:
             continue
-        rest = tuple((k, describe(v)[4:]) for k, v in
+        rest = tuple((k, shared_part(v)) for k, v in
                      [*motion.arguments.items(), *motion.optional.items()]
                      if not any(v is t for t in motion.targets))
         assert seen.setdefault(id(motion.shared), rest) == rest
     return fast
+
+
+def shared_part(operand: Operand) -> tuple:
+    """What moves sharing a tail share of an operand (besides its place)."""
+    text, *fields = describe(operand)[4:]
+    if operand.argument.kind == "optional" and type(operand.argument.value) is s.Number:
+        return (*fields[:3], *fields[4:])
+    return (text, *fields)
 
 
 CELL = f"""MODULE Cell
@@ -167,6 +176,25 @@ def test_moves_with_switches_before_their_target_share_them_and_their_tail():
     assert lone.syntax.tail is not conc[0].syntax.tail and lone.shared is None
 
 
+def test_moves_numbered_for_multimove_share_their_tail_each_with_its_number():
+    # `MoveL \\ID:=10, p1, ...`: a MultiMove program numbers every move, so each lead is
+    # new; the moves share what follows their targets and the lead's argument, and each
+    # has its own number (the plain grammar's model, field by field)
+    lines = [f"CONST robtarget c{i}:={TARGET};" for i in range(6)]
+    moves = [f"    MoveL \\ID:={10 * i + 10}, c{i}, v100, z1, gun\\WObj:=table;"
+             for i in range(6)]
+    text = CELL.replace("  PROC main()\n", "  " + "\n  ".join(lines) + "\n  PROC main()\n"
+                        + "\n".join(moves) + "\n")
+    forget_texts()
+    program = assert_same_model(text)
+    numbered = [m for m in program.motions if m.syntax.start < text.index("MoveL p1,v100")]
+    assert [m.optional["id"].value for m in numbered] == [10.0 * i + 10 for i in range(6)]
+    assert [m.optional["id"].text for m in numbered] == [str(10 * i + 10) for i in range(6)]
+    assert numbered[0].shared is None and all(m.shared is numbered[1].shared is not None
+                                              for m in numbered[1:])
+    assert all(list(m.optional) == ["id", "wobj"] for m in numbered)
+
+
 MOVES = [
     "MoveL p1,v100,z1,gun\\WObj:=table;",
     "MoveL p2,v100,z1,gun\\WObj:=table;",
@@ -196,6 +224,12 @@ MOVES = [
     "MoveL \\Conc \\ID:=5,p2,v100,z1,gun;",
     "MoveL \\Conc,Offs(p1,0,0,-1),v100,z1,gun;",
     "MoveC \\Conc,p1,p2,v100,z1,gun;",
+    "MoveL \\ID:=10,p1,v100,z1,gun\\WObj:=table;",
+    "MoveL \\ID:=11, p2, v100, z1, gun\\WObj:=table;",
+    "MoveL \\Conc \\ID:=12,p1,v100\\V:=150,z1,gun;",
+    "MoveL \\ID:=nId,p1,v100,z1,gun\\WObj:=table;",
+    "MoveL \\ID:=-13,p1,v100,z1,gun\\WObj:=table;",
+    "MoveC \\ID:=14,p1,p2,v100,z1,gun;",
 ]
 
 
