@@ -11,6 +11,7 @@ it reads and writes no file.
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -40,8 +41,11 @@ from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
 from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
 
-#: optional arguments left off the intermediate points of a subdivided move
-INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t"})
+#: optional arguments left off the intermediate and approach points of a move: what belongs
+#: to its end point (`\\T`, `\\Z`, `\\Inpos`), and `\\Conc` (the points fly by, so the
+#: program runs ahead of them anyway, and a controller takes at most five concurrent moves
+#: in succession)
+INTERMEDIATE_DROPS = frozenset({"inpos", "z", "t", "conc"})
 INTERMEDIATE_ZONE = "z0"
 # where a name goes in a statement made once for several names (a program text with a
 # NUL, which the reader refuses in a file, takes the statements one by one)
@@ -129,10 +133,20 @@ def _interleave(counts: np.ndarray, before: bool
 
 def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tuple]:
     """The edits of a statement to a point inserted before `motion`: the optional
-    arguments it drops (INTERMEDIATE_DROPS) and, with `zone`, its zone made
-    INTERMEDIATE_ZONE."""
-    edits = [(op.argument.start, op.argument.end, "")
-             for key, op in motion.optional.items() if key in INTERMEDIATE_DROPS]
+    arguments it drops (INTERMEDIATE_DROPS; one before the target up to the argument
+    after it, with its comma: `MoveL \\Conc, p1` -> `MoveAbsJ jt_p1_1`) and, with `zone`,
+    its zone made INTERMEDIATE_ZONE."""
+    dropped = [op.argument for key, op in motion.optional.items()
+               if key in INTERMEDIATE_DROPS]
+    edits = []
+    if dropped:
+        first = motion.targets[0].argument.start if motion.targets else motion.syntax.end
+        starts = sorted(arg.start for arg in motion.syntax.args)
+        for arg in dropped:
+            end = arg.end
+            if end <= first:  # before the target: what follows it too, up to the next
+                end = starts[bisect_right(starts, arg.start)]
+            edits.append((arg.start, end, ""))
     value = motion.zone.argument.value if zone and motion.zone is not None else None
     if value is not None:
         edits.append((value.start, value.end, INTERMEDIATE_ZONE))

@@ -32,12 +32,16 @@ def test_optional_arguments_are_kept(comp, line, expected):
     out = result.data.decode()
     assert expected in out
     assert not result.skipped
-    # intermediate points of this move, if any, drop \T, \Z and \Inpos and fly by in z0
-    for statement in out.splitlines():
-        if "jt_pBB01_" in statement and "MoveAbsJ" in statement:
-            assert "\\T:=" not in statement and "\\Z:=" not in statement
-            assert "\\Inpos" not in statement
-            assert ", z0, tBallbar" in statement
+    # intermediate points of this move drop \T, \Z, \Inpos and \Conc (its comma too) and
+    # fly by in z0
+    points = [statement.strip() for statement in out.splitlines()
+              if "jt_pBB01_" in statement and "MoveAbsJ" in statement]
+    assert points
+    for statement in points:
+        assert statement.startswith("MoveAbsJ jt_pBB01_")
+        assert "\\T:=" not in statement and "\\Z:=" not in statement
+        assert "\\Inpos" not in statement and "\\Conc" not in statement
+        assert ", z0, tBallbar" in statement
 
 
 def test_a_synchronized_move_keeps_its_number_and_takes_no_intermediate_points(comp):
