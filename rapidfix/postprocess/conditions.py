@@ -21,6 +21,9 @@ cannot:
 - **Configuration monitoring** (`ConfL`/`ConfJ \\Off`), followed like the load: with
   it off, the controller reaches a target on the configuration nearest the one it
   is in, not necessarily the one its confdata names (`config_monitoring`).
+- **Program displacement** (`PDispOn`, `PDispSet` ... `PDispOff`), followed like the
+  load: a displaced move goes where its robtarget is displaced to at run time, which a
+  MoveAbsJ would not be (`program_displacement`).
 """
 
 from __future__ import annotations
@@ -257,6 +260,37 @@ def config_monitoring(program: Program) -> tuple[np.ndarray, np.ndarray]:
     return off, known
 
 
+class _DisplacementWalk(_StateWalk):
+    """Program displacement: set by `PDispOn` and `PDispSet`, taken off by `PDispOff`."""
+
+    def step(self, call: ProcedureCall, state: Any, routine: str) -> Any:
+        key = call.key
+        if key in ("pdispon", "pdispset"):
+            self.seen.add(id(call))
+            return True
+        if key == "pdispoff":
+            self.seen.add(id(call))
+            return False
+        return state
+
+
+def program_displacement(program: Program) -> np.ndarray:
+    """Per motion of `program.motions`: whether a program displacement may be active when
+    it runs (on, or not known before run time). `main` starts without one, as the
+    controller takes it off when a program starts from the beginning; where nothing in
+    the program sets one, none is."""
+    m = len(program.motions)
+    if "pdisp" not in program.text.lower():
+        return np.zeros(m, dtype=bool)
+    walk = _DisplacementWalk(program)
+    walk.run(False)
+    if not walk.seen:
+        return np.zeros(m, dtype=bool)
+    record = walk.record
+    return np.fromiter((record.get(k, _UNKNOWN) is not False for k in range(m)),
+                       dtype=bool, count=m)
+
+
 def grip_loads(program: Program, outside: Declarations | None = None) -> GripLoads:
     """The gripped load in effect at every motion of the program (see the module doc)."""
     walk = _LoadWalk(program, outside or Declarations([]))
@@ -375,6 +409,8 @@ class ProgramConditions:
         self.site_kind = np.array([site.kind for site in sites], dtype="U1").reshape(len(sites))
         motion_of_row = site_motion[owner] if n else np.zeros(0, dtype=np.int64)
         self._payload(targets, grips, motion_of_row)
+        #: per site: a program displacement may be active when it runs
+        self.displaced = program_displacement(program)[site_motion]
         off, _ = config_monitoring(program)
         #: rows that run with configuration monitoring off (ConfL/ConfJ \Off)
         self.config_free = off[motion_of_row] if n else np.zeros(0, dtype=bool)

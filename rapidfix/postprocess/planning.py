@@ -22,6 +22,9 @@ from rapidfix.rapid import MotionInstruction, Program
 
 #: an approach point stands this far beyond twice a joint's play (rad)
 APPROACH_EXTRA_RAD = np.radians(0.01)
+#: why a move keeps its instruction where a program displacement may be active
+DISPLACED = ("a program displacement (PDispOn/PDispSet) may be active: a MoveAbsJ would "
+             "not be displaced")
 
 
 @dataclass(frozen=True)
@@ -67,6 +70,10 @@ def plan_program(program: Program, comp: Compensator, emit: str, *,
     conditions = ProgramConditions(
         program, sites, t, outside, temperature_c,
         model.context_fields(), joint_moves=emit == "jointtargets")
+    if emit == "jointtargets":
+        for i in np.flatnonzero(conditions.displaced).tolist():
+            if sites[i].kept is None:
+                sites[i].kept = DISPLACED
     solved: Plan | None = None
     approach_dir: dict[int, np.ndarray] = {}
     margin = np.zeros(6)
@@ -128,4 +135,4 @@ def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targe
     return solved, dict(zip(chosen, direction)), margin
 
 
-__all__ = ["APPROACH_EXTRA_RAD", "ProgramPlan", "is_fine", "plan_program"]
+__all__ = ["APPROACH_EXTRA_RAD", "DISPLACED", "ProgramPlan", "is_fine", "plan_program"]

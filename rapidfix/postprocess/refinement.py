@@ -173,9 +173,9 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     previous = planned.conditions.predecessors()[site_motion[moves]]
     after = site_of_motion[previous]  # the site of the motion before, or -1
     # a move after another compensated site starts where that one ends (unless it may
-    # stop short: a search); one after an instruction that is not a site (a MoveAbsJ)
-    # may start at its joints
-    ends_there = compensated.copy()
+    # stop short, a search, or be displaced); one after an instruction that is not a site
+    # (a MoveAbsJ) may start at its joints
+    ends_there = compensated & ~planned.conditions.displaced  # (displaced: elsewhere)
     others = np.flatnonzero(kind == "X").tolist()  # few: a search is one of them
     ends_there[[i for i in others if sites[i].motion.name.lower() in STOPS_SHORT]] = False
     keep = (after >= 0) & ends_there[np.maximum(after, 0)]

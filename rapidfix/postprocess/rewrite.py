@@ -225,6 +225,14 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                          + ("no joint of the model has play (backlash)" if not np.any(
                              model.play() > 0) else "no compensated MoveJ ends at a "
                             "fine point"))
+    displaced = int(np.count_nonzero(cond.displaced[[i for i, site in enumerate(planned.sites)
+                                                     if site.reason is None]]))
+    if displaced:
+        record["displaced_moves"] = str(displaced)
+        warnings.append(
+            f"{displaced} move(s) may run with a program displacement (PDispOn/PDispSet), "
+            "known only at run time: they keep their instruction, their robtargets "
+            "compensated where they stand undisplaced")
     free = cond.config_free & ok
     if free.any():
         other = int(np.count_nonzero(np.any(

@@ -83,12 +83,13 @@ STOPS_SHORT = frozenset({"searchl", "searchc", "searchextj"})
 
 
 # Procedures that take targets without moving the robot to them: a world zone's
-# joint limits, the recorded positions of a tool calibration, data read, written,
-# packed or sent (and every procedure of WRITING_PROCEDURES).
+# joint limits, the recorded positions of a tool calibration, the points a program or
+# external axes displacement is measured from, data read, written, packed or sent (and
+# every procedure of WRITING_PROCEDURES).
 NON_MOVING_PROCEDURES = frozenset({
     "wzhomejointdef", "wzlimjointdef", "mtooltcpcalib", "mtoolrotcalib", "stooltcpcalib",
-    "stoolrotcalib", "writeanybin", "setdataval", "setalldataval", "packrawbytes",
-    "rmqsendmessage", "rmqsendwait", "writevar", "writecfgdata",
+    "stoolrotcalib", "pdispon", "eoffson", "writeanybin", "setdataval", "setalldataval",
+    "packrawbytes", "rmqsendmessage", "rmqsendwait", "writevar", "writecfgdata",
     *WRITING_PROCEDURES,
 })
 

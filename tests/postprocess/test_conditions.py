@@ -10,6 +10,7 @@ from rapidfix.postprocess.conditions import (
     arrival_directions,
     config_monitoring,
     grip_loads,
+    program_displacement,
 )
 from rapidfix.rapid import parse_program
 
@@ -150,3 +151,53 @@ def test_without_conf_statements_monitoring_is_on_everywhere():
     text = "\n".join(line for line in MONITORING.splitlines() if "Conf" not in line)
     off, known = config_monitoring(parse_program(text.encode(), "cell.mod"))
     assert not off.any() and known.all()
+
+
+DISPLACEMENT = """MODULE Cell
+  VAR pose pGroove:=[[0,0,2],[1,0,0,0]];
+  VAR bool ok:=TRUE;
+  PROC main()
+    MoveJ p1, v100, fine, tool0;
+    PDispSet pGroove;
+    MoveL p2, v100, fine, tool0;
+    Weld;
+    MoveL p3, v100, fine, tool0;
+    IF ok PDispOn \\ExeP:=p1, p1, tool0;
+    MoveL p4, v100, fine, tool0;
+    PDispOff;
+    MoveL p5, v100, fine, tool0;
+  ENDPROC
+  PROC Weld()
+    MoveL p6, v100, fine, tool0;
+    PDispOff;
+  ENDPROC
+  PROC Service()
+    MoveL p7, v100, fine, tool0;  ! PDispOff in a comment sets nothing
+    PDispOff;
+    MoveL p8, v100, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_program_displacement_follows_the_execution_order():
+    program = parse_program(DISPLACEMENT.encode(), "cell.mod")
+    displaced = dict(zip((m.target.text for m in program.motions),
+                         program_displacement(program).tolist()))
+    assert displaced == {
+        "p1": False,  # main starts without one
+        "p2": True, "p6": True,  # set, and carried into the routine ...
+        "p3": False,  # ... which takes it off
+        "p4": True,  # the compact IF may set it: not known, taken as on
+        "p5": False,
+        "p7": True,  # not called from main: not known ...
+        "p8": False,  # ... until the routine takes it off
+    }
+
+
+def test_without_displacement_statements_nothing_is_displaced():
+    lines = [line for line in DISPLACEMENT.splitlines() if "PDisp" not in line
+             or line.lstrip().startswith("MoveL")]
+    program = parse_program("\n".join(lines).encode(), "cell.mod")
+    assert "PDispOff" in program.text  # in a comment only
+    assert not program_displacement(program).any()

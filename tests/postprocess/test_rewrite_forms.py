@@ -146,3 +146,40 @@ def test_a_move_after_a_search_starts_where_the_search_stopped(comp, before, aft
     assert ("MoveL pBB05, v50, fine, tBallbar\\WObj:=wobjBallbar;" in out) is not after_search_known
     assert result.filtered_reasons.get("start not known before run time", 0) == (
         0 if after_search_known else 1)
+
+
+def plain_unknown(comp) -> int:
+    """Moves of the ballbar program whose start is not known before run time."""
+    from rapidfix.postprocess.refinement import START_UNKNOWN
+
+    plain = rewrite_source(ballbar_program().encode(), "plain.mod", comp, RewriteOptions())
+    return plain.filtered_reasons.get(START_UNKNOWN, 0)
+
+
+def test_moves_under_a_program_displacement_keep_their_instruction(comp):
+    """A MoveAbsJ is not displaced by PDispOn/PDispSet: the moves that may run displaced
+    keep their instruction with compensated robtargets (the controller displaces them),
+    with a warning; the move after one starts where the displacement left the robot, so
+    its start is not known; the moves outside stay MoveAbsJ. PDispOn's points are no
+    moves."""
+    from rapidfix.postprocess.planning import DISPLACED
+    from rapidfix.postprocess.refinement import START_UNKNOWN
+
+    moves = re.findall(r"\n(\s*)(MoveL [^;]*;)", ballbar_program())
+    first, second, third = (line for _, line in moves[2:5])
+    text = ballbar_program().replace(
+        first, "PDispOn \\ExeP:=pBB01, pBB01, tBallbar\\WObj:=wobjBallbar;\n" + first, 1)
+    text = text.replace(second, second + "\nPDispOff;", 1)
+    result = rewrite_source(text.encode(), "disp.mod", comp, RewriteOptions())
+    out = result.data.decode()
+    assert first in out and second in out  # kept, their robtargets compensated in place
+    assert result.filtered_reasons[DISPLACED] == 2
+    # the move after them: kept, where the plain program has none but its first
+    assert third in out
+    assert result.filtered_reasons[START_UNKNOWN] == plain_unknown(comp) + 1
+    assert any("2 move(s) may run with a program displacement" in w for w in result.warnings)
+    assert not any("PDispOn is not a motion instruction" in w for w in result.warnings)
+    assert "MoveAbsJ" in out
+    plain = rewrite_source(ballbar_program().encode(), "plain.mod", comp, RewriteOptions())
+    assert DISPLACED not in plain.filtered_reasons
+    assert all(line not in plain.data.decode() for line in (first, second, third))
