@@ -628,7 +628,7 @@ def one_per_shape(templates: Iterable[tuple[str, ...]]) -> dict[tuple[str, ...],
     `MoveAbsJ \\ID:=12, `: a MultiMove program numbers every move). A template holding a
     string, a radix prefix or a comment is a group of its own (`shape_key`)."""
     kept: dict[tuple, tuple[str, ...]] = {}
-    for texts in templates:
+    for texts in dict.fromkeys(templates):  # (a program's templates are mostly alike)
         keys = tuple(map(shape_key, texts))
         name = _CALL_NAME.match(texts[0]) if texts else None
         if None in keys or name is None or any("!" in text for text in texts):
