@@ -11,6 +11,7 @@ of how the rewrite solved it: forward model against the intended pose).
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -107,9 +108,17 @@ def programs(draw):
     for k in range(n):
         tool = tools[int(rng.integers(len(tools)))]
         tool_frame = _frame(*TOOL_FRAMES[tool])
-        tail = f"v200, fine, t{'ABC'[tool]}" + ("\\WObj:=wT" if use_wobj else "")
+        speed = "v200" + draw(st.sampled_from(["", "\\V:=150", "\\T:=2"]))
+        zone = draw(st.sampled_from(["fine", "z1", "z10"])) + draw(
+            st.sampled_from(["", "\\Z:=5", "\\Inpos:=inpos20"]))
+        tail = f"{speed}, {zone}, t{'ABC'[tool]}" + ("\\WObj:=wT" if use_wobj else "")
+        # optional arguments before the target: concurrent, synchronized (numbered)
+        lead = draw(st.sampled_from(["", "", "\\Conc, ", f"\\ID:={10 * k + 10}, ",
+                                     f"\\Conc \\ID:={10 * k + 10}, "]))
         if draw(st.booleans()) and k % 3 == 1:
             body.append(f"    GripLoad {'lBox' if k % 2 else 'load0'};")
+        if draw(st.integers(0, 9)) == 0:
+            body.append(draw(st.sampled_from(["    PDispSet pShift;", "    PDispOff;"])))
         kind = draw(st.sampled_from(["L", "J", "C", "AbsJ", "Offs", "RelTool", "inline"]))
         if kind == "C" and i + 1 >= len(q):
             kind = "L"
@@ -120,24 +129,30 @@ def programs(draw):
         if kind == "AbsJ":
             deg = ", ".join(f"{v:.4f}" for v in np.degrees(q[i]))
             decls.append(f"  CONST jointtarget j{i}:=[[{deg}],[9E9,9E9,9E9,9E9,9E9,9E9]];")
-            body.append(f"    MoveAbsJ j{i}, {tail};")
+            body.append(f"    MoveAbsJ {lead}j{i}, {tail};")
         elif kind == "inline":
-            body.append(f"    MoveL {lits[0]}, {tail};")
+            body.append(f"    MoveL {lead}{lits[0]}, {tail};")
         else:
             decls += [f"  CONST robtarget {nm}:={lit};" for nm, lit in zip(names, lits)]
             if kind == "C":
-                body.append(f"    MoveC {names[0]}, {names[1]}, {tail};")
+                body.append(f"    MoveC {lead}{names[0]}, {names[1]}, {tail};")
             elif kind == "Offs":
-                body.append(f"    MoveL Offs({names[0]},0,0,0), {tail};")
+                body.append(f"    MoveL {lead}Offs({names[0]},0,0,0), {tail};")
             elif kind == "RelTool":
-                body.append(f"    MoveJ RelTool({names[0]},0,0,0), {tail};")
+                body.append(f"    MoveJ {lead}RelTool({names[0]},0,0,0), {tail};")
             else:
-                body.append(f"    Move{kind} {names[0]}, {tail};")
+                body.append(f"    Move{kind} {lead}{names[0]}, {tail};")
         i += rows
     text = "\n".join(["MODULE Prop", *(f"  {TOOLS[t]}" for t in range(3)), f"  {WOBJ}",
-                      f"  {LOAD}", *decls, "  PROC main()", *body, "  ENDPROC",
+                      f"  {LOAD}", "  VAR pose pShift:=[[0,0,1],[1,0,0,0]];", *decls,
+                      "  PROC main()", *body, "  ENDPROC",
                       "  PROC other()", *body[-2:], "  ENDPROC", "ENDMODULE", ""])
     return text
+
+
+def _numbers(text: str) -> list[str]:
+    """The `\\ID` numbers of a program's moves, in order."""
+    return re.findall(r"\\ID:=(\d+)", text)
 
 
 @st.composite
@@ -167,8 +182,14 @@ def test_any_model_rewrites_any_program_or_says_why(text, model, temperature, em
             result = rewrite_source(text.encode(), "prop.mod", comp, options)
     except RapidfixError as err:  # the project's one-line error is an answer too
         assert "\n" not in str(err)
+        assert "rapidfix bug" not in str(err)  # ... but not one that reports a bug
         return
     assert result.moves_total >= result.moves_compensated
+    # a synchronized move keeps its number, and no move is added among them
+    out = result.data.decode()
+    assert _numbers(out) == _numbers(text)
+    dangling = re.search(r"(?m)^\s*Move\w*\s*,", out)  # no comma left by a dropped argument
+    assert dangling is None, out[dangling.start() - 60:dangling.end() + 60]
     if result.moves_compensated:
         # independent of the solve: the forward model through the written joints
         assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
