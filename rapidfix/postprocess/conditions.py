@@ -409,7 +409,10 @@ class ProgramConditions:
         self.site_kind = np.array([site.kind for site in sites], dtype="U1").reshape(len(sites))
         motion_of_row = site_motion[owner] if n else np.zeros(0, dtype=np.int64)
         self._payload(targets, grips, motion_of_row)
-        #: per site: a program displacement may be active when it runs
+        #: per site: a synchronized move (`\\ID`, Site.synchronized); a program
+        #: displacement may be active when it runs
+        self.synchronized = np.fromiter((site.synchronized for site in sites), dtype=bool,
+                                        count=len(sites))
         self.displaced = program_displacement(program)[site_motion]
         off, _ = config_monitoring(program)
         #: rows that run with configuration monitoring off (ConfL/ConfJ \Off)

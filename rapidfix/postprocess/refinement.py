@@ -232,7 +232,7 @@ def refine_paths(program: Program, model: ErrorModel, robot: RobotModel,
     if absj:
         rows = absj_rows
         off[rows] = curves.distance(rows, predict(rows, q0c[rows])) > path_tolerance_mm
-    unsplit = np.fromiter((sites[i].synchronized for i in segs), bool, len(segs))
+    unsplit = planned.conditions.synchronized[seg_sites]
     points = refine(curves, (q0i, p.q_ideal[to_row]), (q0c, p.q_cmd[to_row]),
                     path_tolerance_mm, predict, solve, bound, given_up=off,
                     unsplit=unsplit if unsplit.any() else None)

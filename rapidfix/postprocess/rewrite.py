@@ -225,8 +225,11 @@ def _run_statement(comp: Compensator, planned: ProgramPlan, solved: Plan,
                          + ("no joint of the model has play (backlash)" if not np.any(
                              model.play() > 0) else "no compensated MoveJ ends at a "
                             "fine point"))
-    displaced = int(np.count_nonzero(cond.displaced[[i for i, site in enumerate(planned.sites)
-                                                     if site.reason is None]]))
+    displaced = 0
+    if cond.displaced.any():
+        compensated = np.fromiter((site.reason is None for site in planned.sites), dtype=bool,
+                                  count=len(planned.sites))
+        displaced = int(np.count_nonzero(cond.displaced & compensated))
     if displaced:
         record["displaced_moves"] = str(displaced)
         warnings.append(
