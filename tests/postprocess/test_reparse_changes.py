@@ -475,14 +475,7 @@ def test_a_multimove_program_is_read_back_in_columns_once_per_statement_shape(
         monkeypatch, comp):
     # every move numbered (`\\ID:=10`, `\\ID:=20`, ...): its statements are read back
     # through a few templates, not one each
-    parsed = []
-    real = verify_module.read_targets_in_bulk
-
-    def spy(text, *args):
-        parsed.append(text)
-        return real(text, *args)
-
-    monkeypatch.setattr(verify_module, "read_targets_in_bulk", spy)
+    parsed = _bulk_texts(monkeypatch)
     text = odd_program("multimove", 900)
     result = rewrite_source(text.encode(), "coordinated.mod", comp, RewriteOptions())
     assert result.moves_compensated == result.moves_total > 200
@@ -490,9 +483,9 @@ def test_a_multimove_program_is_read_back_in_columns_once_per_statement_shape(
     assert result.worst_predicted_mm is not None and result.worst_predicted_mm < 1e-3
 
 
-def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(
-        monkeypatch, comp):
-    parsed = []
+def _bulk_texts(monkeypatch) -> list[str]:
+    """The texts the read-back gives its bulk reader, as it gives them."""
+    parsed: list[str] = []
     real = verify_module.read_targets_in_bulk
 
     def spy(text, *args):
@@ -500,6 +493,12 @@ def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(
         return real(text, *args)
 
     monkeypatch.setattr(verify_module, "read_targets_in_bulk", spy)
+    return parsed
+
+
+def test_a_cam_program_is_read_back_in_columns_without_parsing_its_jointtargets(
+        monkeypatch, comp):
+    parsed = _bulk_texts(monkeypatch)
     result = rewrite_source(cam_program(300).encode(), "cam.mod", comp, RewriteOptions())
     assert result.moves_compensated == 300
     assert parsed and not any("CONST jointtarget jt_" in text for text in parsed)
