@@ -161,11 +161,56 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         q[sel] = np.where(good[:, None], qn, q[sel])
         status[sel] = np.where(good, IKStatus.OK, status[sel])
     rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
-    if rest.size:
+    if rest.size:  # (or is farther along the chain than the passes reach)
         qn, st = robot.ik_nearest(flange[rest], np.zeros((rest.size, 6)))
         q[rest] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
         status[rest] = st
-    return q[:n], status
+    return _unwound(robot, q[:n], free.extra, free.prev, chained), status
+
+
+def _unwound(robot: RobotModel, q: np.ndarray, extra: np.ndarray, prev: np.ndarray,
+             rows: np.ndarray) -> np.ndarray:
+    """`q` (N,6) with the joints that turn more than once (a range over 360°) of each of
+    `rows` moved by whole turns to stand nearest the joints of the move before it (`prev`,
+    into q then `extra`), as moved already, along the chain: the controller follows a
+    joint turn by turn, where a solution taken nearest the calibration position (a chain
+    longer than the passes reach) would jump back a turn. The turns add up along a chain
+    by pointer jumping; a move whose moved joints would leave the limits keeps its own,
+    and the moves after it follow those."""
+    limits = np.asarray(robot.limits, dtype=float)
+    turns = limits[:, 1] - limits[:, 0] > 2.0 * np.pi + 1e-9
+    if rows.size == 0 or not turns.any():
+        return q
+    n = q.shape[0]
+    points = np.concatenate([q, extra])
+    finite = np.isfinite(points).all(axis=1)
+    links = np.full(points.shape[0], -1, dtype=np.int64)
+    links[rows] = prev[rows]
+    links[~finite | ~finite[np.maximum(links, 0)]] = -1
+    linked = np.flatnonzero(links >= 0)
+    steps = np.zeros_like(points)  # the whole turns between a move and the one before
+    steps[np.ix_(linked, np.flatnonzero(turns))] = 2.0 * np.pi * np.round(
+        (points[links[linked]] - points[linked])[:, turns] / (2.0 * np.pi))
+    kept = np.zeros(points.shape[0], dtype=bool)  # moves that keep their own joints
+    while True:
+        parent = np.where(kept, -1, links)
+        offset = np.where(kept[:, None], 0.0, steps)
+        for _ in range(64):  # each pass doubles the links summed: chains of up to 2**64
+            linked = np.flatnonzero(parent >= 0)
+            if linked.size == 0:
+                break
+            up = parent[linked]
+            offset[linked] = offset[linked] + offset[up]
+            parent[linked] = parent[up]
+        moved = q + offset[:n]
+        outside = np.zeros(points.shape[0], dtype=bool)
+        outside[:n] = finite[:n] & ~np.all((moved >= limits[:, 0]) & (moved <= limits[:, 1]),
+                                           axis=1)
+        # the first of a chain outside: the moves after it follow it, so may come back in
+        first = outside & ~kept & ~(outside[np.maximum(links, 0)] & (links >= 0))
+        if not first.any():
+            return moved
+        kept |= first
 
 
 Conditions = Callable[[np.ndarray, np.ndarray], Context]

@@ -82,3 +82,30 @@ def test_monitoring_on_refuses_a_branch_the_arm_is_not_on(cell, comp, tmp_path):
     # the controller would stop at each: no solution on the branch its confdata names
     assert result.moves_compensated == 1
     assert "config_free_moves" not in (tmp_path / "out.mod").read_text(encoding="utf-8")
+
+
+def test_monitoring_off_follows_a_joint_turn_by_turn_along_a_long_chain(cell, comp, tmp_path):
+    """Axis 6 turns from 0° to 300° over 160 moves whose confdata name no solution (a CAM
+    program's [0,0,0,0]). The controller follows it turn by turn; so must the rewrite,
+    also past the first moves of the chain, where a solution taken nearest the calibration
+    position would jump back a turn (-60° for 300°): a MoveAbsJ would unwind the wrist."""
+    robot = cell["robot"]
+    n = 160
+    source = np.column_stack([np.full((n, 5), [10.0, 10.0, 20.0, 30.0, 40.0]),
+                              np.linspace(0.0, 300.0, n)])
+    T = robot.fk(np.radians(source))
+    first = robot.confdata(np.radians(source[:1]))[0].tolist()
+    decls = [f"  CONST robtarget p{k}:={_robtarget(T[k], first if k == 0 else [0, 0, 0, 0])};"
+             for k in range(n)]
+    moves = ["    MoveJ p0, v100, fine, tool0;", "    ConfL \\Off;", "    ConfJ \\Off;"]
+    moves += [f"    MoveJ p{k}, v100, z1, tool0;" for k in range(1, n)]
+    src = tmp_path / "wind.mod"
+    src.write_text("MODULE Wind\n" + "\n".join(decls) + "\n  PROC main()\n" + "\n".join(moves)
+                   + "\n  ENDPROC\nENDMODULE\n", encoding="utf-8")
+    result = rewrite_file(src, tmp_path / "out.mod", comp, RewriteOptions())
+    assert result.moves_compensated == n
+    q_cmd, landed, wanted = _landing(cell, tmp_path / "out.mod", T)
+    assert np.abs(np.degrees(q_cmd) - source).max() < 0.2  # every turn as the source's
+    assert np.abs(np.diff(np.degrees(q_cmd[:, 5]))).max() < 3.0  # no jump back a turn
+    err = landed - wanted
+    assert np.linalg.norm(err - err.mean(axis=0), axis=1).max() < 0.05

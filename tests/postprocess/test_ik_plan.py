@@ -106,3 +106,49 @@ def test_a_target_on_a_wrong_branch_names_the_nearest_confdata_that_reach_it(
         want = ", ".join(str(found[i].tolist()) for i in order[:3])
         assert reason[row] == (f"no solution on the branch its confdata {conf[row].tolist()} "
                                f"names (it is reachable with {want})")
+
+
+def _followed(q: np.ndarray, extra: np.ndarray, prev: np.ndarray, turns: np.ndarray,
+              limits: np.ndarray) -> np.ndarray:
+    """The chains walked one move at a time (each move after the ones before it): a move's
+    turning joints by whole turns nearest the move before it, as moved already."""
+    n = q.shape[0]
+    points = np.concatenate([q, extra])
+    want = points.copy()
+    for k in range(n):
+        up = prev[k]
+        if up < 0 or not (np.isfinite(q[k]).all() and np.isfinite(want[up]).all()):
+            continue
+        # the whole turns the move before took, and those between the two as they stand
+        shift = (want[up] - points[up]) + 2 * np.pi * np.round((points[up] - q[k]) / (2 * np.pi))
+        moved = np.where(turns, q[k] + shift, q[k])
+        if np.all((moved >= limits[:, 0]) & (moved <= limits[:, 1])):
+            want[k] = moved
+    return want[:n]
+
+
+def test_joints_unwound_along_chains_are_those_followed_move_by_move(cell):
+    """`_unwound` (turns summed by pointer jumping) against the chains walked one move at
+    a time; a move that would leave the limits keeps its joints, and the moves after it
+    follow those."""
+    from rapidfix.postprocess.plan import _unwound
+
+    robot = cell["robot"]
+    limits = np.asarray(robot.limits, dtype=float)
+    turns = limits[:, 1] - limits[:, 0] > 2 * np.pi + 1e-9
+    rng = np.random.default_rng(5)
+    for trial in range(40):
+        n, m = int(rng.integers(1, 60)), int(rng.integers(0, 4))
+        # a path whose turning joints drift over several turns, taken within one turn
+        path = np.cumsum(rng.normal(0.0, 0.4, (n, 6)), axis=0)
+        q = np.where(turns, (path + np.pi) % (2 * np.pi) - np.pi, np.clip(path, -1, 1))
+        extra = rng.uniform(-np.pi, np.pi, (m, 6))
+        prev = np.full(n + m, -1, dtype=np.int64)
+        for k in range(n):  # each move after one before it (a forest of chains), or none
+            choice = int(rng.integers(-1, k + m)) if k + m else -1
+            prev[k] = -1 if choice < 0 else (n + choice if choice < m else choice - m)
+        q[rng.random(n) < 0.05] = np.nan  # a move without a solution breaks its chain
+        got = _unwound(robot, q, extra, prev, np.flatnonzero(prev[:n] >= 0))
+        want = _followed(q, extra, prev, turns, limits)
+        assert np.array_equal(np.isnan(got), np.isnan(want)), trial
+        assert np.allclose(got[~np.isnan(got)], want[~np.isnan(want)], atol=1e-12), trial
