@@ -161,11 +161,27 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         q[sel] = np.where(good[:, None], qn, q[sel])
         status[sel] = np.where(good, IKStatus.OK, status[sel])
     rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
-    if rest.size:  # (or is farther along the chain than the passes reach)
-        qn, st = robot.ik_nearest(flange[rest], np.zeros((rest.size, 6)))
+    if rest.size:  # (or is farther along the chain than the passes reach): nearest the
+        # nearest move before it that has joints, else the calibration position
+        points = np.concatenate([q, free.extra])
+        above = _solved_ancestors(np.isfinite(points).all(axis=1), free.prev)[rest]
+        seeds = np.where((above >= 0)[:, None], points[np.maximum(above, 0)], 0.0)
+        qn, st = robot.ik_nearest(flange[rest], seeds)
         q[rest] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
         status[rest] = st
     return _unwound(robot, q[:n], free.extra, free.prev, chained), status
+
+
+def _solved_ancestors(solved: np.ndarray, prev: np.ndarray) -> np.ndarray:
+    """Per point: the nearest point before it along its chain (`prev`, -1 none) that is
+    `solved`, or -1; by pointer jumping, each pass doubling the links passed over."""
+    above = np.asarray(prev, dtype=np.int64).copy()
+    for _ in range(64):
+        passing = np.flatnonzero((above >= 0) & ~solved[np.maximum(above, 0)])
+        if passing.size == 0:
+            break
+        above[passing] = above[above[passing]]
+    return above
 
 
 def _unwound(robot: RobotModel, q: np.ndarray, extra: np.ndarray, prev: np.ndarray,

@@ -11,6 +11,7 @@ and the rewritten program must land on the targets on the virtual robot.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from rapidfix.postprocess.rewrite import RewriteOptions, rewrite_file
@@ -84,15 +85,24 @@ def test_monitoring_on_refuses_a_branch_the_arm_is_not_on(cell, comp, tmp_path):
     assert "config_free_moves" not in (tmp_path / "out.mod").read_text(encoding="utf-8")
 
 
-def test_monitoring_off_follows_a_joint_turn_by_turn_along_a_long_chain(cell, comp, tmp_path):
-    """Axis 6 turns from 0° to 300° over 160 moves whose confdata name no solution (a CAM
-    program's [0,0,0,0]). The controller follows it turn by turn; so must the rewrite,
-    also past the first moves of the chain, where a solution taken nearest the calibration
-    position would jump back a turn (-60° for 300°): a MoveAbsJ would unwind the wrist."""
+@pytest.mark.parametrize("path", ["winding", "flipped"])
+def test_monitoring_off_follows_the_chain_however_long(cell, comp, tmp_path, path):
+    """160 moves whose confdata name no solution (a CAM program's [0,0,0,0]), the first
+    on the source's branch. The controller follows the chain, each move nearest the one
+    before; so must the rewrite, also past the moves the passes follow one by one, where
+    a solution nearest the calibration position would differ. `winding`: axis 6 turns
+    from 0° to 300° (it would jump back a turn, -60° for 300°, and the MoveAbsJ unwind
+    the wrist). `flipped`: the wrist on its flipped branch (axis 5 negative), whose other
+    solution lies nearer the calibration position (the wrist would flip)."""
     robot = cell["robot"]
     n = 160
-    source = np.column_stack([np.full((n, 5), [10.0, 10.0, 20.0, 30.0, 40.0]),
-                              np.linspace(0.0, 300.0, n)])
+    if path == "winding":
+        source = np.column_stack([np.full((n, 5), [10.0, 10.0, 20.0, 30.0, 40.0]),
+                                  np.linspace(0.0, 300.0, n)])
+    else:
+        source = np.column_stack([np.full((n, 3), [10.0, 10.0, 20.0]),
+                                  np.linspace(150.0, 166.0, n), np.full(n, -40.0),
+                                  np.linspace(150.0, 230.0, n)])
     T = robot.fk(np.radians(source))
     first = robot.confdata(np.radians(source[:1]))[0].tolist()
     decls = [f"  CONST robtarget p{k}:={_robtarget(T[k], first if k == 0 else [0, 0, 0, 0])};"
@@ -106,6 +116,6 @@ def test_monitoring_off_follows_a_joint_turn_by_turn_along_a_long_chain(cell, co
     assert result.moves_compensated == n
     q_cmd, landed, wanted = _landing(cell, tmp_path / "out.mod", T)
     assert np.abs(np.degrees(q_cmd) - source).max() < 0.2  # every turn as the source's
-    assert np.abs(np.diff(np.degrees(q_cmd[:, 5]))).max() < 3.0  # no jump back a turn
+    assert np.abs(np.diff(np.degrees(q_cmd), axis=0)).max() < 3.0  # no jump, no flip
     err = landed - wanted
     assert np.linalg.norm(err - err.mean(axis=0), axis=1).max() < 0.05
