@@ -147,19 +147,32 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         q[start] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
         status[start] = st
     chained = rows[free.prev[rows] >= 0]
+    before = free.prev[chained]
     seeds = np.full((chained.size, 6), np.nan)
+    points = np.concatenate([q, free.extra])
+    # the chained rows after each point, found by the point: those of a pass are the ones
+    # whose move before changed in the pass before (all at first)
+    order = np.argsort(before, kind="stable")
+    after = before[order]
+    ahead = np.arange(chained.size)
     for _ in range(_FREE_PASSES):
-        points = np.concatenate([q, free.extra])
-        now = points[free.prev[chained]]
-        changed = np.isfinite(now).all(axis=1) & ~np.all(now == seeds, axis=1)
+        now = points[before[ahead]]
+        changed = np.isfinite(now).all(axis=1) & ~np.all(now == seeds[ahead], axis=1)
         if not changed.any():
             break
-        seeds[changed] = now[changed]
-        sel = chained[changed]
+        at = ahead[changed]
+        seeds[at] = now[changed]
+        sel = chained[at]
         qn, st = robot.ik_nearest(flange[sel], now[changed])
         good = st == IKStatus.OK
-        q[sel] = np.where(good[:, None], qn, q[sel])
+        old = q[sel]
+        q[sel] = points[sel] = np.where(good[:, None], qn, old)
         status[sel] = np.where(good, IKStatus.OK, status[sel])
+        moved = sel[~np.all(q[sel] == old, axis=1)]
+        lo, hi = np.searchsorted(after, moved, "left"), np.searchsorted(after, moved, "right")
+        ahead = np.sort(order[np.repeat(lo, hi - lo) + (np.arange((hi - lo).sum())
+                                                         - np.repeat(np.cumsum(hi - lo)
+                                                                     - (hi - lo), hi - lo))])
     rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
     if rest.size:  # (or is farther along the chain than the passes reach): nearest the
         # nearest move before it that has joints, else the calibration position
