@@ -169,10 +169,8 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         q[sel] = points[sel] = np.where(good[:, None], qn, old)
         status[sel] = np.where(good, IKStatus.OK, status[sel])
         moved = sel[~np.all(q[sel] == old, axis=1)]
-        lo, hi = np.searchsorted(after, moved, "left"), np.searchsorted(after, moved, "right")
-        ahead = np.sort(order[np.repeat(lo, hi - lo) + (np.arange((hi - lo).sum())
-                                                         - np.repeat(np.cumsum(hi - lo)
-                                                                     - (hi - lo), hi - lo))])
+        ahead = np.sort(order[_spans(np.searchsorted(after, moved, "left"),
+                                     np.searchsorted(after, moved, "right"))])
     rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
     if rest.size:  # (or is farther along the chain than the passes reach): nearest the
         # nearest move before it that has joints, else the calibration position
@@ -183,6 +181,12 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         q[rest] = np.where((st == IKStatus.OK)[:, None], qn, np.nan)
         status[rest] = st
     return _unwound(robot, q[:n], free.extra, free.prev, chained), status
+
+
+def _spans(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The indices lo[i] .. hi[i]-1 of every i, one after the other."""
+    size = hi - lo
+    return np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(int(size.sum()))
 
 
 def _solved_ancestors(solved: np.ndarray, prev: np.ndarray) -> np.ndarray:

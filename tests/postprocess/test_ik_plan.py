@@ -152,3 +152,14 @@ def test_joints_unwound_along_chains_are_those_followed_move_by_move(cell):
         want = _followed(q, extra, prev, turns, limits)
         assert np.array_equal(np.isnan(got), np.isnan(want)), trial
         assert np.allclose(got[~np.isnan(got)], want[~np.isnan(want)], atol=1e-12), trial
+
+
+def test_spans_are_the_ranges_one_after_the_other():
+    from rapidfix.postprocess.plan import _spans
+
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        lo = rng.integers(0, 30, rng.integers(0, 8))
+        hi = lo + rng.integers(0, 5, lo.size)
+        want = [k for a, b in zip(lo.tolist(), hi.tolist()) for k in range(a, b)]
+        assert _spans(lo, hi).tolist() == want
