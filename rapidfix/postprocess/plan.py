@@ -274,10 +274,19 @@ def plan_targets(
         return Plan(flange, np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0, bool), reason,
                     Context())
     context = conditions if callable(conditions) else (lambda _q, _known: conditions)
-    q_ideal, status = ik_on_conf(robot, flange, conf)
-    status = np.asarray(status)
     if free is not None and free.rows.any():
+        # a move whose configuration is free and whose move before is known goes where
+        # the chain takes it: its confdata's solution is not asked for (taken mid-chain,
+        # it would lead the moves after it onto its branch)
+        own = np.flatnonzero(~(free.rows & (free.prev[:n] >= 0)))
+        q_own, status_own = ik_on_conf(robot, flange[own], conf[own])
+        q_ideal = np.full((n, 6), np.nan)
+        status = np.full(n, IKStatus.NO_MATCHING_CONF, dtype=np.asarray(status_own).dtype)
+        q_ideal[own], status[own] = q_own, status_own
         q_ideal, status = _follow_nearest(robot, flange, q_ideal, status, free)
+    else:
+        q_ideal, status = ik_on_conf(robot, flange, conf)
+        status = np.asarray(status)
     solved = status == IKStatus.OK
     for code, text in REASONS.items():
         reason[status == code] = text

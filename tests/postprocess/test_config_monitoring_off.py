@@ -87,7 +87,7 @@ def test_monitoring_on_refuses_a_branch_the_arm_is_not_on(cell, comp, tmp_path):
 
 # axis 6 past 180°: beyond the range the model was fitted on, which the rewrite says
 @pytest.mark.filterwarnings("ignore:joint 6 at:rapidfix.error_model.joint_rbf.OutsideRangeWarning")
-@pytest.mark.parametrize("path", ["winding", "flipped"])
+@pytest.mark.parametrize("path", ["winding", "flipped", "misnamed"])
 def test_monitoring_off_follows_the_chain_however_long(cell, comp, tmp_path, path):
     """160 moves whose confdata name no solution (a CAM program's [0,0,0,0]), the first
     on the source's branch. The controller follows the chain, each move nearest the one
@@ -95,19 +95,28 @@ def test_monitoring_off_follows_the_chain_however_long(cell, comp, tmp_path, pat
     a solution nearest the calibration position would differ. `winding`: axis 6 turns
     from 0° to 300° (it would jump back a turn, -60° for 300°, and the MoveAbsJ unwind
     the wrist). `flipped`: the wrist on its flipped branch (axis 5 negative), whose other
-    solution lies nearer the calibration position (the wrist would flip)."""
+    solution lies nearer the calibration position (the wrist would flip). `misnamed`: the
+    same path, each confdata naming the other wrist branch, which the controller ignores
+    (taken mid-chain, those solutions would lead the moves after them onto it)."""
     robot = cell["robot"]
     n = 160
     if path == "winding":
         source = np.column_stack([np.full((n, 5), [10.0, 10.0, 20.0, 30.0, 40.0]),
                                   np.linspace(0.0, 300.0, n)])
-    else:
+    else:  # flipped, misnamed
         source = np.column_stack([np.full((n, 3), [10.0, 10.0, 20.0]),
                                   np.linspace(150.0, 166.0, n), np.full(n, -40.0),
                                   np.linspace(150.0, 230.0, n)])
     T = robot.fk(np.radians(source))
     first = robot.confdata(np.radians(source[:1]))[0].tolist()
-    decls = [f"  CONST robtarget p{k}:={_robtarget(T[k], first if k == 0 else [0, 0, 0, 0])};"
+    written = np.zeros((n, 4), dtype=int)
+    if path == "misnamed":  # the other wrist: axis 4 and 6 a half turn round, 5 mirrored
+        other = source + np.array([0.0, 0.0, 0.0, -180.0, 0.0, -180.0])
+        other[:, 4] *= -1.0
+        assert np.allclose(robot.fk(np.radians(other)), T, atol=1e-6)
+        written = robot.confdata(np.radians(other))
+    written[0] = first
+    decls = [f"  CONST robtarget p{k}:={_robtarget(T[k], written[k].tolist())};"
              for k in range(n)]
     moves = ["    MoveJ p0, v100, fine, tool0;", "    ConfL \\Off;", "    ConfJ \\Off;"]
     moves += [f"    MoveJ p{k}, v100, z1, tool0;" for k in range(1, n)]
