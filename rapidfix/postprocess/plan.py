@@ -136,7 +136,10 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
     """Joints (N,6) and status (N,) with the free rows on the solution nearest the joints
     of the move before them. A free row whose move before is not known keeps its
     confdata's solution, or, without one, takes the one nearest the calibration
-    position (all joints 0), where an arm is when a cell starts."""
+    position (all joints 0), where an arm is when a cell starts. The passes follow each
+    chain a move at a time, `_FREE_PASSES` moves deep; a row past them is solved nearest
+    the nearest move before it that has joints, and the turns are then unwound along the
+    chains (`_unwound`)."""
     n = q.shape[0]
     rows = np.flatnonzero(free.rows)
     q = np.where((status == IKStatus.OK)[:, None], np.asarray(q, dtype=float), np.nan)
@@ -171,9 +174,11 @@ def _follow_nearest(robot: RobotModel, flange: np.ndarray, q: np.ndarray, status
         moved = sel[~np.all(q[sel] == old, axis=1)]
         ahead = np.sort(order[_spans(np.searchsorted(after, moved, "left"),
                                      np.searchsorted(after, moved, "right"))])
-    rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]  # the move before failed too
-    if rest.size:  # (or is farther along the chain than the passes reach): nearest the
-        # nearest move before it that has joints, else the calibration position
+    # not reached: the move before failed too, or stands farther along the chain than the
+    # passes reach: nearest the nearest move before it that has joints, else the
+    # calibration position
+    rest = rows[status[rows] == IKStatus.NO_MATCHING_CONF]
+    if rest.size:
         points = np.concatenate([q, free.extra])
         above = _solved_ancestors(np.isfinite(points).all(axis=1), free.prev)[rest]
         seeds = np.where((above >= 0)[:, None], points[np.maximum(above, 0)], 0.0)
@@ -206,8 +211,8 @@ def _unwound(robot: RobotModel, q: np.ndarray, extra: np.ndarray, prev: np.ndarr
     """`q` (N,6) with the joints that turn more than once (a range over 360°) of each of
     `rows` moved by whole turns to stand nearest the joints of the move before it (`prev`,
     into q then `extra`), as moved already, along the chain: the controller follows a
-    joint turn by turn, where a solution taken nearest the calibration position (a chain
-    longer than the passes reach) would jump back a turn. The turns add up along a chain
+    joint turn by turn, where a solution taken nearest a move farther back (past the moves
+    the passes reach) may stand a turn off. The turns add up along a chain
     by pointer jumping; a move whose moved joints would leave the limits keeps its own,
     and the moves after it follow those."""
     limits = np.asarray(robot.limits, dtype=float)
