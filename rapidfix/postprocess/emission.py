@@ -141,7 +141,7 @@ def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tu
     edits = []
     if dropped:
         first = motion.targets[0].argument.start if motion.targets else motion.syntax.end
-        starts = sorted(arg.start for arg in motion.syntax.args)
+        starts = [arg.start for arg in motion.syntax.args]  # (in the text's order)
         for arg in dropped:
             end = arg.end
             if end <= first:  # before the target: what follows it too, up to the next
