@@ -57,7 +57,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--timeout",
         type=float,
         default=defaults.timeout,
-        help=f"seconds without progress before sending again (default {defaults.timeout:g})",
+        help=(
+            f"seconds without progress before sending again (default {defaults.timeout:g}; "
+            "HELLO and END double it after each silence, up to 4x)"
+        ),
     )
     parser.add_argument(
         "--retries",

@@ -48,6 +48,7 @@ from rapidfix.link.protocol import (
 )
 
 POLL_S = 0.02  # longest single wait on the port; deadlines are checked between waits
+BACKOFF_LIMIT = 4  # HELLO and END wait at most this many times their first wait
 
 
 @dataclass(frozen=True)
@@ -194,9 +195,9 @@ class Uploader:
         """Announce the file; return the frame the receiver wants next."""
         frame = encode_frame(FrameKind.HELLO, 0, plan.hello.encode())
         self.port.reset_input_buffer()
-        for _ in range(self.settings.retries + 1):
+        for wait in self._answer_waits():
             self.port.write(frame)
-            reply = self._wait_for({FrameKind.READY}, self._patience())
+            reply = self._wait_for({FrameKind.READY}, wait)
             if reply is None:
                 continue
             if len(reply.payload) < 2:
@@ -272,9 +273,9 @@ class Uploader:
         Every frame is acknowledged by now, so a NAK here is a stale one and ignored.
         """
         frame = encode_frame(FrameKind.END, plan.frames, encode_end(plan.size, plan.crc))
-        for _ in range(self.settings.retries + 1):
+        for wait in self._answer_waits():
             self.port.write(frame)
-            reply = self._wait_for({FrameKind.DONE}, self._patience(), keepalive=FrameKind.BUSY)
+            reply = self._wait_for({FrameKind.DONE}, wait, keepalive=FrameKind.BUSY)
             if reply is None or reply.seq != plan.frames or not reply.payload:
                 continue
             self._check_done(plan, reply.payload[0])
@@ -319,6 +320,16 @@ class Uploader:
         baud = getattr(self.port, "baudrate", 0) or 115200
         window_bytes = self.settings.window * (MAX_PAYLOAD + OVERHEAD)
         return self.settings.timeout + window_bytes * 10 / baud
+
+    def _answer_waits(self) -> list[float]:
+        """The waits of HELLO's and END's attempts: doubled after each silence, up to 4×.
+
+        The receiver answers those after opening, reading back, renaming or loading
+        a file, which a controller's flash or a busy disk can hold up for seconds;
+        a fixed pace would give up while it works, with the outcome of END in doubt.
+        """
+        first = self._patience()
+        return [first * min(2**k, BACKOFF_LIMIT) for k in range(self.settings.retries + 1)]
 
     def _read_frames(self) -> list[Frame]:
         """Whatever frames have arrived, waiting at most POLL_S for the first byte."""

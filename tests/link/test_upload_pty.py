@@ -237,6 +237,26 @@ def test_load_refused_leaves_the_verified_file_in_place(tmp_path):
     assert (tmp_path / "ctrl" / NAME).read_bytes() == b"MODULE bad\nENDMODULE\n"
 
 
+def test_a_receiver_busy_for_a_second_after_end_still_answers_in_time(tmp_path):
+    """END waits longer after each silence: a slow Load (or rename) is not a lost link.
+
+    Six attempts at the first wait (0.1 s) would give up after 0.6 s, with the
+    outcome in doubt; doubled up to 4×, the waits add up to 1.9 s.
+    """
+    loads = []
+
+    def slow_loader(path):
+        time.sleep(1.0)
+        loads.append(path.read_bytes())
+
+    data = b"MODULE m\nENDMODULE\n"
+    quick = LinkSettings(timeout=0.05, retries=5)
+    with SimulatedController(tmp_path / "ctrl", loader=slow_loader) as sim:
+        result = send(tmp_path, data, sim, settings=quick, load=True)
+    assert result.loaded and loads == [data]
+    assert (tmp_path / "ctrl" / NAME).read_bytes() == data
+
+
 def test_an_empty_file_and_a_single_short_frame(tmp_path):
     with SimulatedController(tmp_path / "ctrl", loader=None) as sim:
         assert send(tmp_path, b"", sim).frames == 0
