@@ -51,6 +51,13 @@ def add_common_options(parser: argparse.ArgumentParser) -> None:
                         help="put an approach point before every compensated fine point so "
                         "that each joint with play (a model with backlash) arrives from one "
                         "known side, as machine tools position (recorded in the header)")
+    parser.add_argument("--static-external-axes", action="store_true",
+                        help="the external axes carry neither the robot nor the work (a "
+                        "servo gun, a positioner whose work objects are not coordinated): "
+                        "compensate targets whatever their external axis values; without "
+                        "it, a target with an external axis anywhere but 0 is left as it "
+                        "was, since a track may carry the robot there (recorded in the "
+                        "header)")
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -153,6 +160,7 @@ FLAGS = {
     "RewriteOptions(strict=True)": "--strict",
     "RewriteOptions(force=True)": "--force",
     "RewriteOptions.temperature_c": "--temperature",
+    "RewriteOptions(static_external_axes=True)": "--static-external-axes",
     "Compensator.load(decl_files)": "--decls",
     "BatchSettings(in_place=True)": "--in-place",
 }
@@ -187,6 +195,7 @@ def options_from_args(args: argparse.Namespace) -> RewriteOptions:
             force=args.force,
             temperature_c=args.temperature,
             approach=args.approach,
+            static_external_axes=args.static_external_axes,
         )
     except InvalidOption as err:
         flag = FLAGS.get(f"RewriteOptions.{err.option}", err.option)

@@ -58,14 +58,18 @@ def is_fine(program: Program, motion: MotionInstruction) -> bool:
 
 
 def plan_program(program: Program, comp: Compensator, emit: str, *,
-                 temperature_c: float | None = None, approach: bool = False) -> ProgramPlan:
+                 temperature_c: float | None = None, approach: bool = False,
+                 static_external_axes: bool = False) -> ProgramPlan:
     """Resolve, solve and compensate every target; decide each move's emission mode.
 
     `emit` is 'jointtargets' or 'robtargets'; `temperature_c` the cell temperature the
-    program runs at (None: not known); `approach` asks for approach points."""
+    program runs at (None: not known); `approach` asks for approach points;
+    `static_external_axes` says the external axes carry neither the robot nor the work
+    (else a target with one standing anywhere but 0 is left as it was)."""
     model, robot = comp.model, comp.robot
     outside = Declarations(comp.decls)
-    sites, targets = resolve(program, outside, emit)
+    sites, targets = resolve(program, outside, emit,
+                             static_external_axes=static_external_axes)
     t = targets
     conditions = ProgramConditions(
         program, sites, t, outside, temperature_c,

@@ -330,8 +330,13 @@ def _around_targets(motion: MotionInstruction) -> tuple[str | None, tuple, bool]
     return (_optional_reason(motion) if optional else None), key, "id" in optional
 
 
-def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Site], Targets]:
+def resolve(program: Program, outside: Declarations, emit: str, *,
+            static_external_axes: bool = True) -> tuple[list[Site], Targets]:
     """Sites for every robtarget motion instruction, and the rows of the usable targets.
+
+    `static_external_axes` False: a move to a target whose external axes stand anywhere
+    but 0 or unused (9E9) gets a reason (`moving_axes_reason`), since a track may carry
+    the robot or a positioner the work there, which nothing in the program describes.
 
     One cheap pass over the instructions: what depends only on an instruction's
     name, or only on its tool / work object / load operands (motions that share
@@ -410,11 +415,16 @@ def resolve(program: Program, outside: Declarations, emit: str) -> tuple[list[Si
         row_set.extend([set_index] * len(found))
     sets = [used for used, _ in frame_sets.values()]  # by index: insertion order
     flat = _flat_values(values)
-    if deferred and flat is not None:
-        zero = _zero_quaternions(flat)
-        if zero.any():
-            keep = ~zero
-            _drop_rows(sites, row_site, zero)
+    if (deferred or not static_external_axes) and flat is not None:
+        drop = np.zeros(len(flat), dtype=bool)
+        if deferred:
+            drop = _zero_quaternions(flat)
+            _drop_rows(sites, row_site, drop)
+        if not static_external_axes:
+            _drop_moving_axes(sites, row_site, flat, drop)
+        if drop.any():
+            keep = ~drop
+            _renumber(sites, row_site, drop)
             rows = np.flatnonzero(keep).tolist()
             values = [values[r] for r in rows]
             operands = [operands[r] for r in rows]
@@ -451,14 +461,52 @@ def _zero_quaternions(flat: np.ndarray) -> np.ndarray:
 
 def _drop_rows(sites: list[Site], row_site: list[int], zero: np.ndarray) -> None:
     """The sites of one target whose quaternion is zero (rare) get that reason and no
-    rows; the rows of the others move up."""
-    new_row = np.cumsum(~zero) - 1
+    rows (`_renumber` moves the rows of the others up)."""
     for site_index in sorted({row_site[r] for r in np.flatnonzero(zero).tolist()}):
         site = sites[site_index]  # only one-target sites are checked on the arrays
         site.reason = operand_label(site.targets, site.targets[0]) \
             + "orientation quaternion is zero"
         site.rows = []
-    first = int(np.argmax(zero))
+
+
+#: an external axis value at least this large is RAPID's 9E9: the axis is not used
+UNUSED_AXIS = 1e9
+
+
+def moving_axes_reason(values: np.ndarray) -> str:
+    """Why a target whose external axes (6,) stand at `values` is left as it was."""
+    standing = [f"eax_{'abcdef'[k]} at {values[k]:g}" for k in range(6)
+                if 0 < abs(values[k]) < UNUSED_AXIS]
+    axes = "axes " if len(standing) > 1 else "axis "
+    return (f"external {axes}{', '.join(standing)}: a track carrying the robot or a positioner "
+            "carrying the work stands elsewhere there, and rapidfix does not model it "
+            "(RewriteOptions(static_external_axes=True) where they carry neither)")
+
+
+def _drop_moving_axes(sites: list[Site], row_site: list[int], flat: np.ndarray,
+                      drop: np.ndarray) -> None:
+    """Every site with a target whose external axes stand anywhere but 0 or unused gets
+    `moving_axes_reason` and no rows; its rows are marked in `drop`."""
+    extax = np.abs(flat[:, 11:17])
+    moving = ((extax > 0) & (extax < UNUSED_AXIS)).any(axis=1) & ~drop
+    reasons: dict[tuple[float, ...], str] = {}  # a track's few stations: each worded once
+    for row in np.flatnonzero(moving).tolist():
+        site = sites[row_site[row]]
+        if site.rows:
+            values = tuple(flat[row, 11:17].tolist())
+            reason = reasons.get(values)
+            if reason is None:
+                reason = reasons[values] = moving_axes_reason(flat[row, 11:17])
+            site.reason = operand_label(site.targets, site.targets[site.rows.index(row)]) \
+                + reason
+            drop[site.rows] = True
+            site.rows = []
+
+
+def _renumber(sites: list[Site], row_site: list[int], drop: np.ndarray) -> None:
+    """The rows of the sites that keep theirs, moved up past the `drop`ped ones."""
+    new_row = np.cumsum(~drop) - 1
+    first = int(np.argmax(drop))
     for site_index in sorted(set(row_site[first:])):
         site = sites[site_index]
         site.rows = [int(new_row[r]) for r in site.rows]

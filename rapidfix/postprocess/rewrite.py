@@ -74,6 +74,10 @@ class RewriteOptions:
     #: put an approach point before every compensated fine point, so that each joint
     #: with play arrives from one known side (unidirectional positioning)
     approach: bool = False
+    #: the external axes carry neither the robot nor the work (a servo gun, a positioner
+    #: whose work objects are not coordinated): a target's external axis values do not
+    #: move it. Else a target with one standing anywhere but 0 is left as it was
+    static_external_axes: bool = False
 
     def __post_init__(self) -> None:
         """Refuse values the rewrite cannot honour (InvalidOption names the field)."""
@@ -110,6 +114,8 @@ def header_options(options: RewriteOptions, comp: Compensator) -> dict[str, str]
         recorded["temperature_c"] = f"{options.temperature_c:g}"
     if options.approach:
         recorded["approach"] = "fine_points"
+    if options.static_external_axes:
+        recorded["external_axes"] = "static"
     return recorded
 
 
@@ -432,7 +438,8 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
         )
     step(REWRITE_STEPS[1])
     planned = plan_program(program, comp, options.emit,
-                           temperature_c=options.temperature_c, approach=options.approach)
+                           temperature_c=options.temperature_c, approach=options.approach,
+                           static_external_axes=options.static_external_axes)
     step(REWRITE_STEPS[2])
     refined = refine_paths(program, comp.model, comp.robot, planned,
                            options.path_tolerance_mm, options.emit)
