@@ -53,7 +53,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, PathRefinement, refine_paths
 from rapidfix.postprocess.resolve import Declarations, Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_owned
+from rapidfix.rapid import Editor, Program, ends_its_line, foreign_target_calls, parse_owned
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 #: programs of this much kernel work or more are solved with the compiled kernels (numba):
@@ -477,8 +477,10 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
     if compensated:  # the header says "compensated": never on a file where nothing is
         if old is not None:
             _strip_old_header(editor, program.text)
-        editor.insert(program.modules[0].header_end, header.render(
-            _module_indent(program), "\n"))
+        at = program.modules[0].header_end
+        block = header.render(_module_indent(program), "\n")
+        # the block is line comments: what follows on the MODULE line goes on its own
+        editor.insert(at, block if ends_its_line(program.text, at) else block + "\n")
         units.comments.extend(header.lines())
     moves_total, inserted = len(planned.sites), emission.inserted
     before = _predicted_before(comp, planned.targets, refined.solved)

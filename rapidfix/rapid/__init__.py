@@ -32,7 +32,7 @@ from rapidfix.rapid.values import (
 )
 
 if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
-    from rapidfix.rapid.edit import Editor
+    from rapidfix.rapid.edit import Editor, ends_its_line
     from rapidfix.rapid.fastpath import blank_comments
     from rapidfix.rapid.foreign_calls import foreign_target_calls
     from rapidfix.rapid.format import (
@@ -75,6 +75,7 @@ LAZY_EXPORTS = {
     "SYSTEM_DATA": "system_data",
     "Assignment": "syntax",
     "Editor": "edit",
+    "ends_its_line": "edit",
     "blank_comments": "fastpath",
     "NameRef": "syntax",
     "Node": "syntax",
@@ -136,6 +137,7 @@ __all__ = [
     "WobjData",
     "ZoneData",
     "blank_comments",
+    "ends_its_line",
     "foreign_target_calls",
     "format_declaration",
     "format_jointtarget",

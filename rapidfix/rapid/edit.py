@@ -25,6 +25,26 @@ class EditConflict(ValueError):
     """Two edits touch the same text."""
 
 
+def _ends_its_line(text: str, offset: int, line_end: int) -> bool:
+    """Whether nothing but blanks or a comment follows `offset` up to `line_end`."""
+    if offset >= line_end:
+        return True
+    rest = text[offset:line_end].lstrip(" \t")
+    return not rest or rest[0] in "!\r\n"
+
+
+def ends_its_line(text: str, offset: int) -> bool:
+    """Whether nothing but blanks or a comment follows `offset` on its line (new lines
+    inserted there then go after the line, else the code after `offset` is moved to a
+    line of its own: a line comment inserted before it would swallow it)."""
+    end = len(text)
+    for newline in "\n\r":
+        found = text.find(newline, offset)
+        if 0 <= found < end:
+            end = found
+    return _ends_its_line(text, offset, end)
+
+
 class Editor:
     """Collects replacements and insertions for one Program and renders the result."""
 
@@ -110,11 +130,21 @@ class Editor:
         bodies: list[str | _Lines] = []
         pads: dict[str, str] = {}  # one string for each distinct indentation
         open_end = not full.endswith("\n")
-        for line_start, start, end, text in zip(first, spans[:, 0].tolist(), ends, texts):
+        for line_start, start, stop, end, text in zip(first, spans[:, 0].tolist(),
+                                                      spans[:, 1].tolist(), ends, texts):
             pad = indent
             if pad is None:
                 line = full[line_start:start]
                 pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if not _ends_its_line(full, stop, end):
+                # code follows on the anchor's line (`p1:=...; PROC main() ...`): the new
+                # lines go right after the anchor, and that code on a line of its own
+                if type(text) is list:
+                    text = "\n".join(text)
+                positions.append(stop)
+                bodies.append("".join(f"\n{pad}{part}" if part else "\n"
+                                      for part in text.split("\n")) + "\n")
+                continue
             if type(text) is list:
                 if text and "" not in text and not (end == size and open_end) and not any(
                         "\n" in part or "\r" in part for part in text):
