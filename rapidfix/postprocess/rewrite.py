@@ -479,8 +479,10 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
             _strip_old_header(editor, program.text)
         at = program.modules[0].header_end
         block = header.render(_module_indent(program), "\n")
-        # the block is line comments: what follows on the MODULE line goes on its own
-        editor.insert(at, block if ends_its_line(program.text, at) else block + "\n")
+        # the block is line comments: what follows on the MODULE line (code, or a comment
+        # the header would take in) goes on a line of its own
+        editor.insert(at, block if ends_its_line(program.text, at, comment=False)
+                      else block + "\n")
         units.comments.extend(header.lines())
     moves_total, inserted = len(planned.sites), emission.inserted
     before = _predicted_before(comp, planned.targets, refined.solved)

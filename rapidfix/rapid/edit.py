@@ -25,24 +25,25 @@ class EditConflict(ValueError):
     """Two edits touch the same text."""
 
 
-def _ends_its_line(text: str, offset: int, line_end: int) -> bool:
-    """Whether nothing but blanks or a comment follows `offset` up to `line_end`."""
+def _ends_its_line(text: str, offset: int, line_end: int, comment: bool = True) -> bool:
+    """Whether nothing but blanks (or a comment, with `comment`) follows `offset` up to
+    `line_end`."""
     if offset >= line_end:
         return True
     rest = text[offset:line_end].lstrip(" \t")
-    return not rest or rest[0] in "!\r\n"
+    return not rest or rest[0] in ("!\r\n" if comment else "\r\n")
 
 
-def ends_its_line(text: str, offset: int) -> bool:
-    """Whether nothing but blanks or a comment follows `offset` on its line (new lines
-    inserted there then go after the line, else the code after `offset` is moved to a
-    line of its own: a line comment inserted before it would swallow it)."""
+def ends_its_line(text: str, offset: int, comment: bool = True) -> bool:
+    """Whether nothing but blanks (or a comment, with `comment`) follows `offset` on its
+    line. New lines inserted there go after the line; else what follows `offset` goes on
+    a line of its own (a line comment inserted before code would swallow it)."""
     end = len(text)
     for newline in "\n\r":
         found = text.find(newline, offset)
         if 0 <= found < end:
             end = found
-    return _ends_its_line(text, offset, end)
+    return _ends_its_line(text, offset, end, comment)
 
 
 class Editor:
@@ -218,7 +219,9 @@ class Editor:
             return "  "
         source = self.program.source
         line_start = source.line_start(items[0].start)
-        return source.text[line_start:items[0].start] or ""
+        before = source.text[line_start:items[0].start]
+        # (an item on the MODULE line, `MODULE M PROC main() ...`, has no indentation)
+        return before if not before.strip(" \t") else "  "
 
     # ------------------------------------------------------------ output
     def release_program(self) -> None:

@@ -103,8 +103,39 @@ def test_everything_on_one_line(comp):
     packed = rewrite_source(text.encode(), "packed.mod", comp, OPTIONS["jointtargets"])
     out = packed.data.decode()
     assert out.rstrip().endswith("ENDMODULE")
-    assert all(not line.lstrip().startswith("!") or "rapidfix-compensated" in line
-               and "MoveL" not in line and "CONST" not in line for line in out.splitlines())
+    assert all(not line.lstrip().startswith("!") or ("rapidfix-compensated" in line
+               and "MoveL" not in line and "CONST" not in line) for line in out.splitlines())
     assert _shape(packed.data)[1] == _shape(plain.data)[1]
     assert len(parse_program(packed.data, "out.mod").motions) == len(
         parse_program(plain.data, "out.mod").motions)
+
+
+_FAR = "[[600,100,500],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+SMALL = {
+    # the first item on the MODULE line: new declarations are not indented by "MODULE M "
+    "no declarations, one line, no final newline":
+        f"MODULE M PROC main() MoveJ {_FAR}, v100, fine, tool0; ENDPROC ENDMODULE",
+    "a comment on the MODULE line":
+        f"MODULE M(SYSMODULE) ! cell data\n  CONST robtarget p1:={_FAR};\n  PROC main()\n"
+        "    MoveJ p1, v100, fine, tool0;\n  ENDPROC\nENDMODULE\n",
+    "the routine on the line of the last declaration":
+        f"MODULE M\n  CONST robtarget p1:={_FAR}; PROC main()\n"
+        "    MoveJ p1, v100, fine, tool0; MoveL Offs(p1,0,0,30), v100, fine, tool0;\n"
+        "  ENDPROC ENDMODULE\n",
+}
+
+
+def test_small_layouts_keep_their_code_and_comments(comp):
+    from rapidfix.postprocess.header import read_header
+
+    for name, text in SMALL.items():
+        source = parse_program(text.encode(), "m.mod")
+        for mode, options in OPTIONS.items():
+            result = rewrite_source(text.encode(), "m.mod", comp, options)
+            assert result.moves_compensated == len(source.motions), (name, mode)
+            out = parse_program(result.data, "out.mod")  # the whole output parses
+            assert len(out.motions) >= len(source.motions), (name, mode)
+            header = read_header(out.text)
+            assert header is not None and header.summary.endswith("left as they were")
+            if "!" in text:
+                assert any(line.strip() == "! cell data" for line in out.text.splitlines())
