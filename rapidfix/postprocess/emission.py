@@ -11,6 +11,7 @@ it reads and writes no file.
 
 from __future__ import annotations
 
+import re
 from bisect import bisect_right
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -88,11 +89,15 @@ def _stem(site: Site, slot: int) -> str:
     return f"{motion.name}_L{motion.span.line}"
 
 
+_BLANKS = re.compile(r"\s*")  # what str.strip() takes
+
+
 def indent_before(program: Program, offset: int) -> str | None:
     """Whitespace between the line start and offset, or None if text precedes it."""
     source = program.source
-    before = source.text[source.line_start(offset):offset]
-    return before if before.strip() == "" else None
+    # (a match of the blanks, not a slice: a line may hold the whole program)
+    blank = _BLANKS.fullmatch(source.text, source.line_start(offset), offset)
+    return blank.group() if blank is not None else None
 
 
 def _target_slot(text: str, syntax: Any, spans: list[Any], targets: list[str], statement: str,

@@ -8,6 +8,7 @@ ending; the result is encoded with the file's encoding and BOM. With no edits,
 
 from __future__ import annotations
 
+import re
 from array import array
 from collections.abc import Sequence
 from itertools import chain
@@ -25,13 +26,16 @@ class EditConflict(ValueError):
     """Two edits touch the same text."""
 
 
+_BLANKS = re.compile(r"[ \t]*")
+
+
 def _ends_its_line(text: str, offset: int, line_end: int, comment: bool = True) -> bool:
     """Whether nothing but blanks (or a comment, with `comment`) follows `offset` up to
-    `line_end`."""
+    `line_end` (looking at the blanks after `offset` only: a line may be the program)."""
     if offset >= line_end:
         return True
-    rest = text[offset:line_end].lstrip(" \t")
-    return not rest or rest[0] in ("!\r\n" if comment else "\r\n")
+    after = _BLANKS.match(text, offset, line_end).end()
+    return after >= line_end or text[after] in ("!\r\n" if comment else "\r\n")
 
 
 def ends_its_line(text: str, offset: int, comment: bool = True) -> bool:
@@ -134,9 +138,8 @@ class Editor:
         for line_start, start, stop, end, text in zip(first, spans[:, 0].tolist(),
                                                       spans[:, 1].tolist(), ends, texts):
             pad = indent
-            if pad is None:
-                line = full[line_start:start]
-                pad = line[: len(line) - len(line.lstrip(" \t"))]
+            if pad is None:  # the blanks the anchor's line starts with
+                pad = _BLANKS.match(full, line_start, start).group()
             if not _ends_its_line(full, stop, end):
                 # code follows on the anchor's line (`p1:=...; PROC main() ...`): the new
                 # lines go right after the anchor, and that code on a line of its own
