@@ -113,7 +113,7 @@ def _own_names(label: str) -> frozenset[str]:
 
 def _without(names: frozenset[str], reason: str) -> str:
     """`reason` with each whole word of `names` shown as '…'."""
-    if not names:
+    if not any(name in reason for name in names):  # (a substring test spares the words)
         return reason
     return _WORD.sub(lambda m: "…" if m.group() in names else m.group(), reason)
 
@@ -134,8 +134,10 @@ def skipped_lines(skipped: list[Skipped], every: bool = False) -> list[str]:
         both = kinds.get((move.label, move.reason))
         if both is None:
             reason = in_cli_words(move.reason)
+            kind = reason_kind(reason)
+            without = _without(_own_names(move.label), reason)
             both = kinds[(move.label, move.reason)] = (
-                reason_kind(_without(_own_names(move.label), reason)), reason_kind(reason))
+                kind if without == reason else reason_kind(without), kind)
         named = groups.setdefault(both[0], {})
         named[both[1]] = named.get(both[1], 0) + 1
     rest: list[tuple[str, int]] = []
