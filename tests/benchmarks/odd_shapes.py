@@ -77,8 +77,11 @@ speed holds (and grows linearly) on layouts the fast paths were not tuned on:
 - inline_data: declared targets whose numbers carry all the digits a double holds
                (`-149.50012345678901`, `0.2588190451025207`), moves with inline
                speeddata and zonedata aggregates, `\\T:=` times
+- one_line:    `hand_offs` with every statement on one line, MODULE to ENDMODULE (a
+               program written by another program); its "lines" are those of `hand_offs`
 
-`odd_program(shape, lines)` gives about `lines` lines of that shape.
+`odd_program(shape, lines)` gives about `lines` lines of that shape (`odd_lines` counts
+them).
 """
 
 from __future__ import annotations
@@ -100,7 +103,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
               "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
-              "record_tables", "multimove")
+              "record_tables", "multimove", "one_line")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -711,6 +714,12 @@ def _record_tables(n: int) -> list[str]:
             *_parts(moves), "ENDMODULE"]
 
 
+def _one_line(n: int) -> list[str]:
+    """`hand_offs` with MODULE to ENDMODULE on one line (its comments left out)."""
+    return [" ".join(line.strip() for line in _hand_offs(n)
+                     if line.strip() and not line.strip().startswith("!"))]
+
+
 def _multimove(n: int) -> list[str]:
     """A MultiMove task's coordinated program: every move numbered with `\\ID:=` (ten
     apart, as RobotStudio writes them), some arcs and joint moves among them, between
@@ -749,7 +758,10 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "one_routine": _one_routine, "inline_data": _inline_data,
              "long_names": _long_names, "deep_calls": _deep_calls,
              "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
-             "record_tables": _record_tables, "multimove": _multimove}
+             "record_tables": _record_tables, "multimove": _multimove, "one_line": _one_line}
+#: shapes whose statements share one line: their lines are counted as those of the shape
+#: written a statement to a line
+_PACKED = {"one_line": "hand_offs"}
 
 
 def odd_moves(shape: str, n_moves: int) -> str:
@@ -760,7 +772,21 @@ def odd_moves(shape: str, n_moves: int) -> str:
 
 @functools.lru_cache(maxsize=16)
 def _lines_per_move(shape: str) -> float:
+    shape = _PACKED.get(shape, shape)
     return odd_moves(shape, 1000).count(_NEWLINES.get(shape, "\n")) / 1000
+
+
+def odd_lines(shape: str, data: bytes) -> int:
+    """The lines of a program of `shape` (of the shape unpacked, for a packed one)."""
+    if shape in _PACKED:
+        return round(data.count(b";") * _lines_per_move(_PACKED[shape])
+                     / _statements_per_move(_PACKED[shape]))
+    return data.count(b"\n") or data.count(b"\r")  # (lone_cr: CR line ends)
+
+
+@functools.lru_cache(maxsize=4)
+def _statements_per_move(shape: str) -> float:
+    return odd_moves(shape, 1000).count(";") / 1000
 
 
 def odd_program(shape: str, lines: int) -> str:
