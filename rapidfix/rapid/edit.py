@@ -223,7 +223,7 @@ class Editor:
         source = self.program.source
         line_start = source.line_start(items[0].start)
         before = source.text[line_start:items[0].start]
-        # (an item on the MODULE line, `MODULE M PROC main() ...`, has no indentation)
+        # (an item on the MODULE line, `MODULE M PROC main() ...`: the usual two spaces)
         return before if not before.strip(" \t") else "  "
 
     # ------------------------------------------------------------ output

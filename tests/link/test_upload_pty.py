@@ -240,8 +240,9 @@ def test_load_refused_leaves_the_verified_file_in_place(tmp_path):
 def test_a_receiver_busy_for_a_second_after_end_still_answers_in_time(tmp_path):
     """END waits longer after each silence: a slow Load (or rename) is not a lost link.
 
-    Six attempts at the first wait (0.1 s) would give up after 0.6 s, with the
-    outcome in doubt; doubled up to 4×, the waits add up to 1.9 s.
+    Six attempts at the first wait (0.05 s and the time of a window on the line, 0.11 s)
+    would give up after 0.66 s, with the outcome in doubt; doubled up to 4×, the waits
+    add up to 2.1 s.
     """
     loads = []
 
