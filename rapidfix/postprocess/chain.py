@@ -11,7 +11,7 @@ previous iteration); the rewrite treats it accordingly.
 
 from __future__ import annotations
 
-from rapidfix.rapid import Assignment, ProcedureCall, Program, Routine, Statement
+from rapidfix.rapid import Assignment, CompactIf, ProcedureCall, Program, Routine, Statement
 
 
 def predecessors(program: Program) -> list[int]:
@@ -44,3 +44,26 @@ def predecessors(program: Program) -> list[int]:
             elif not isinstance(statement, Assignment):
                 previous = -1
     return result
+
+
+def compact_if_moves(program: Program) -> set[int]:
+    """The motions (indices in `program.motions`) that are a compact IF's one statement
+    (`IF bPick MoveJ p1, ...;`): nothing may be put before one, since the IF would then
+    guard only what was put there, and the move itself would run whatever the
+    condition."""
+    index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
+    found: set[int] = set()
+    stack: list[list[Statement]] = []
+    for module in program.syntax.modules:
+        for item in module.items:
+            if isinstance(item, Routine):
+                stack.append(item.body)
+                stack.extend(h.body for h in item.handlers)
+    while stack:
+        for statement in stack.pop():
+            if isinstance(statement, CompactIf):
+                k = index_of.get(id(statement.statement))
+                if k is not None:
+                    found.add(k)
+            stack.extend(statement.bodies())
+    return found

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rapidfix.postprocess.chain import compact_if_moves
 from rapidfix.postprocess.compensator import Compensator
 from rapidfix.postprocess.conditions import ProgramConditions
 from rapidfix.postprocess.plan import Plan, plan_targets
@@ -109,7 +110,8 @@ def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targe
     where its lower limit is too close): compensate those rows in that direction.
     A MoveL or MoveC keeps its path: its joints arrive the way the path takes them. A
     synchronized move (`\\ID`) takes no approach point: the other tasks of its MultiMove
-    program would have to take one too.
+    program would have to take one too. Nor does a compact IF's move (`IF b MoveJ p1,
+    ...;`): the IF would guard the approach point only (`compact_if_moves`).
 
     Returns (plan, site -> direction, margin), the plan None when no site qualifies;
     None when no joint has play."""
@@ -118,8 +120,10 @@ def _plan_approach(program: Program, comp: Compensator, sites: list[Site], targe
     if not np.any(play > 0):
         return None
     margin = np.where(play > 0, 2.0 * play + APPROACH_EXTRA_RAD, 0.0)
+    guarded = compact_if_moves(program)
     chosen = [i for i, site in enumerate(sites) if site.rows and site.kind == "J"
-              and not site.synchronized and is_fine(program, site.motion)]
+              and not site.synchronized and site.index not in guarded
+              and is_fine(program, site.motion)]
     if not chosen:
         return None, {}, margin
     rows = np.array([sites[i].rows[-1] for i in chosen], dtype=np.int64)

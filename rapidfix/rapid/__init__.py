@@ -55,6 +55,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
     )
     from rapidfix.rapid.syntax import (
         Assignment,
+        CompactIf,
         NameRef,
         Node,
         Number,
@@ -74,6 +75,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see of the lazy exports
 LAZY_EXPORTS = {
     "SYSTEM_DATA": "system_data",
     "Assignment": "syntax",
+    "CompactIf": "syntax",
     "Editor": "edit",
     "ends_its_line": "edit",
     "blank_comments": "fastpath",
@@ -109,6 +111,7 @@ __all__ = [
     "STOPS_SHORT",
     "SYSTEM_DATA",
     "Assignment",
+    "CompactIf",
     "Declaration",
     "Editor",
     "JointTarget",

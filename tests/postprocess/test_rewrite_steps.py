@@ -291,3 +291,39 @@ def test_synchronized_moves_keep_their_numbers_and_take_no_points(approach):
     unnumbered = rewrite_source(plain.encode(), "plain.mod", comp, options)
     assert unnumbered.points_added > 0 and SYNCHRONIZED not in unnumbered.filtered_reasons
     assert ("_app" in unnumbered.data.decode()) == approach
+
+
+def test_a_compact_ifs_move_takes_no_approach_point():
+    """`IF b MoveJ p1, v100, fine, tool0;` guards one statement: an approach point put
+    before the move would be all the IF guards, and the move would run whatever `b`
+    is. The same move in an IF block, or on its own, takes its approach point."""
+    from rapidfix.rapid.syntax import CompactIf, If
+
+    comp = _backlash_comp()
+    far = "[[600,100,500],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    near = "[[620,100,480],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = (f"MODULE C\n  CONST robtarget p1:={far};\n  CONST robtarget p2:={near};\n"
+            "  VAR bool b:=TRUE;\n  PROC main()\n    MoveJ p2, v100, fine, tool0;\n"
+            "    IF b MoveJ p1, v100, fine, tool0;\n"
+            "    IF b THEN MoveJ p2, v100, fine, tool0; ENDIF\n"
+            "    IF b MoveJ p2, v100, fine, tool0; MoveJ p1, v100, fine, tool0;\n"
+            "  ENDPROC\nENDMODULE\n")
+    result = rewrite_source(text.encode(), "guarded.mod", comp, RewriteOptions(approach=True))
+    assert result.moves_compensated == 5
+    out = parse_program(result.data, "out.mod")
+    body = next(r for r in out.syntax.modules[0].items if getattr(r, "name", "") == "main").body
+    kinds = [type(statement).__name__ for statement in body]
+    # each compact IF still guards one move, to its own target, and no approach point
+    compact = [statement for statement in body if isinstance(statement, CompactIf)]
+    assert len(compact) == 2
+    for statement in compact:
+        name = statement.statement.args[0].value.name
+        assert name.startswith("jt_") and not name.endswith("_app")
+    # the block IF and the moves on their own take theirs: approach, then the move
+    block = next(statement for statement in body if isinstance(statement, If))
+    names = [s.args[0].value.name for s in block.branches[0][1]]
+    assert names[0].endswith("_app") and not names[1].endswith("_app")
+    # p2 and p1 on their own, each after its approach point
+    assert sum(kind not in ("CompactIf", "If") for kind in kinds) == 4
+    assert sum(name.endswith("_app") for name in re.findall(r"jt_\w+", result.data.decode())
+               ) >= 3
