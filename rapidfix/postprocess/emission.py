@@ -37,7 +37,7 @@ from rapidfix.postprocess.naming import NameAllocator, count_identifiers
 from rapidfix.postprocess.placement import Placement
 from rapidfix.postprocess.planning import ProgramPlan
 from rapidfix.postprocess.refinement import PathRefinement
-from rapidfix.postprocess.reparse_changes import CheckUnits, JointSlot, TargetSlot
+from rapidfix.postprocess.reparse_changes import SHAPE_TARGET, CheckUnits, JointSlot, TargetSlot
 from rapidfix.postprocess.resolve import Site
 from rapidfix.postprocess.verify import Expected
 from rapidfix.rapid import Editor, MotionInstruction, Operand, Program, format_declaration
@@ -147,11 +147,14 @@ def _intermediate_edits(motion: MotionInstruction, zone: bool = True) -> list[tu
     if dropped:
         first = motion.targets[0].argument.start if motion.targets else motion.syntax.end
         starts = [arg.start for arg in motion.syntax.args]  # (in the text's order)
+        text = motion.source.text
         for arg in dropped:
-            end = arg.end
+            end, gap = arg.end, ""
             if end <= first:  # before the target: what follows it too, up to the next
                 end = starts[bisect_right(starts, arg.start)]
-            edits.append((arg.start, end, ""))
+                # (`MoveJ\Conc,p1`: the name and the target keep a blank between them)
+                gap = "" if text[arg.start - 1].isspace() else " "
+            edits.append((arg.start, end, gap))
     value = motion.zone.argument.value if zone and motion.zone is not None else None
     if value is not None:
         edits.append((value.start, value.end, INTERMEDIATE_ZONE))
@@ -510,8 +513,10 @@ class _Emitter:
         if approach_name is not None:  # stands still there (fine), then arrives from one side
             self.inserted.add(approach_name)
             drops = _intermediate_edits(motion, zone=False)
-            lines.append(statement_variant(self.program, motion,
-                                            joint_edits(site, approach_name) + drops) + sep)
+            statement = statement_variant(self.program, motion,
+                                          joint_edits(site, approach_name) + drops)
+            lines.append(statement + sep)
+            self.units.shapes.add(statement.replace(approach_name, SHAPE_TARGET))
         return lines, variants, slots
 
     def _variant_parts(self, site: Site, shape: tuple[str, str] | None

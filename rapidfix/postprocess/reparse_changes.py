@@ -27,6 +27,10 @@ JointSlot = tuple[str, str, str]
 TargetSlot = tuple[str, ...]
 
 
+#: the target every statement of `CheckUnits.shapes` names
+SHAPE_TARGET = "rapidfix_shape_target"
+
+
 @dataclass
 class CheckUnits:
     """New statements and declarations of one rewrite, by (module, routine).
@@ -41,6 +45,9 @@ class CheckUnits:
     """
 
     comments: list[str] = field(default_factory=list)
+    #: statements whose syntax alone is checked, one of each distinct shape, their target
+    #: named `SHAPE_TARGET` (the approach points': their joints are not read back)
+    shapes: set[str] = field(default_factory=set)
     #: by scope: the declarations in the order they came, and the kind of each
     #: ("joint", "robtarget" or "other")
     _decls: dict[tuple[str, str | None], list[str]] = field(default_factory=dict)
@@ -193,6 +200,18 @@ class CheckUnits:
                 out.append("ENDPROC")
             out.append("ENDMODULE")
         return "\n".join(out) + "\n", order
+
+    def parse_shapes(self, filename: str) -> None:
+        """Parse the `shapes`, one statement each, in one check program; raises
+        RapidfixError (syntax) or ValueError when one is not one motion instruction."""
+        if not self.shapes:
+            return
+        body = "\n".join(sorted(self.shapes))
+        text = f"MODULE rapidfix_shapes\nPROC rapidfix_shapes()\n{body}\nENDPROC\nENDMODULE\n"
+        program = parse_program(text, f"{filename} (rewritten parts)")
+        if len(program.motions) != len(self.shapes):
+            raise ValueError(f"{len(program.motions)} motion instructions in "
+                             f"{len(self.shapes)} statements")
 
     def parse(self, filename: str) -> tuple[Program, list[MotionInstruction]]:
         """Parse the check program; the motions (one per statement id, by id).

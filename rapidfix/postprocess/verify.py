@@ -87,6 +87,12 @@ def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     explains a syntax error. All give the same values (tests compare them). A
     jointtarget that does not hold the joints the rewrite meant to write stops it.
     """
+    try:  # the approach points' statements, one of each shape
+        units.parse_shapes(filename)
+    except (RapidfixError, ValueError) as err:
+        raise RapidSemanticError(
+            f"the rewritten program does not parse ({err}); nothing was written",
+            file=filename, hint="please report this as a rapidfix bug") from None
     found = _read_columns(units, expected, filename)
     if found is None:
         text, order = units.text()

@@ -327,3 +327,42 @@ def test_a_compact_ifs_move_takes_no_approach_point():
     assert sum(kind not in ("CompactIf", "If") for kind in kinds) == 4
     assert sum(name.endswith("_app") for name in re.findall(r"jt_\w+", result.data.decode())
                ) >= 3
+
+
+def test_a_dropped_conc_leaves_a_blank_between_instruction_and_target():
+    """`MoveJ\\Conc,p1,...` written tight: the approach and intermediate points leave off
+    `\\Conc` with its comma, and their MoveAbsJ still stands apart from its target (it
+    came out as `MoveAbsJjt_p1_app,...`, which parses as a call of another name)."""
+    comp = _backlash_comp()
+    far = "[[600,100,500],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    near = "[[640,160,430],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = (f"MODULE T\n  CONST robtarget p1:={far};\n  CONST robtarget p2:={near};\n"
+            "  PROC main()\n    MoveJ p2,v100,fine,tool0;\n    MoveJ\\Conc,p1,v100,fine,tool0;\n"
+            "    MoveL\\Conc,p2,v100,z1,tool0;\n  ENDPROC\nENDMODULE\n")
+    options = RewriteOptions(approach=True, path_tolerance_mm=0.01)
+    result = rewrite_source(text.encode(), "tight.mod", comp, options)
+    assert result.moves_compensated == 3 and result.points_added > 0
+    out = result.data.decode()
+    assert "MoveAbsJjt" not in out
+    assert re.search(r"MoveAbsJ jt_p1_app,v100,fine,tool0;", out)
+    assert re.search(r"MoveAbsJ jt_p2_1,v100,z0,tool0;", out)
+    assert "MoveAbsJ\\Conc,jt_p1,v100,fine,tool0;" in out  # the move keeps its \Conc
+    whole = parse_program(result.data, "out.mod")  # the whole output parses
+    assert len(whole.motions) == 3 + result.points_added + out.count("_app,")
+
+
+def test_an_approach_statement_that_does_not_parse_is_never_written(monkeypatch):
+    """The approach points' statements are checked too, one of each shape: with the
+    blank of the test above taken away again, the read-back refuses the rewrite (before,
+    it wrote the file and said every move was compensated)."""
+    from rapidfix.exceptions import RapidSemanticError
+
+    comp = _backlash_comp()
+    far = "[[600,100,500],[0,0,1,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]]"
+    text = (f"MODULE T\n  CONST robtarget p1:={far};\n  PROC main()\n"
+            "    MoveJ\\Conc,p1,v100,fine,tool0;\n  ENDPROC\nENDMODULE\n")
+    edits = emission_module._intermediate_edits
+    monkeypatch.setattr(emission_module, "_intermediate_edits", lambda motion, zone=True: [
+        (start, end, new.strip()) for start, end, new in edits(motion, zone)])
+    with pytest.raises(RapidSemanticError, match="does not parse"):
+        rewrite_source(text.encode(), "tight.mod", comp, RewriteOptions(approach=True))
