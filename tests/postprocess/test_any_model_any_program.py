@@ -150,7 +150,10 @@ def programs(draw):
              "  PROC other()", *body[-2:], "  ENDPROC", "ENDMODULE"]
     # RAPID does not care where a line ends: some lines joined to the next one
     joins = draw(st.sets(st.integers(0, len(lines) - 2), max_size=len(lines) // 3))
-    return "".join(line + (" " if k in joins else "\n") for k, line in enumerate(lines))
+    text = "".join(line + (" " if k in joins else "\n") for k, line in enumerate(lines))
+    if draw(st.booleans()):  # nor about blanks: `MoveJ\Conc,p1,...` written tight
+        text = re.sub(r"(Move\w*) (\\(?:Conc|ID:=\d+)(?: \\ID:=\d+)?), ", r"\1\2,", text)
+    return text
 
 
 def _numbers(text: str) -> list[str]:
