@@ -20,12 +20,7 @@ def predecessors(program: Program) -> list[int]:
     index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
     user_routines = {r.name.lower() for r in program.routines}
     result = [-1] * len(program.motions)
-    stack: list[list[Statement]] = []
-    for module in program.syntax.modules:
-        for item in module.items:
-            if isinstance(item, Routine):
-                stack.append(item.body)
-                stack.extend(h.body for h in item.handlers)
+    stack = _routine_bodies(program)
     while stack:
         previous = -1
         for statement in stack.pop():
@@ -53,12 +48,7 @@ def compact_if_moves(program: Program) -> set[int]:
     condition."""
     index_of = {id(m.syntax): k for k, m in enumerate(program.motions)}
     found: set[int] = set()
-    stack: list[list[Statement]] = []
-    for module in program.syntax.modules:
-        for item in module.items:
-            if isinstance(item, Routine):
-                stack.append(item.body)
-                stack.extend(h.body for h in item.handlers)
+    stack = _routine_bodies(program)
     while stack:
         for statement in stack.pop():
             if isinstance(statement, CompactIf):
@@ -67,3 +57,14 @@ def compact_if_moves(program: Program) -> set[int]:
                     found.add(k)
             stack.extend(statement.bodies())
     return found
+
+
+def _routine_bodies(program: Program) -> list[list[Statement]]:
+    """The statement lists of every routine of `program` and of its handlers."""
+    bodies: list[list[Statement]] = []
+    for module in program.syntax.modules:
+        for item in module.items:
+            if isinstance(item, Routine):
+                bodies.append(item.body)
+                bodies.extend(h.body for h in item.handlers)
+    return bodies
