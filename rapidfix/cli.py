@@ -10,12 +10,14 @@ unwinds like Ctrl-C (temporary files are removed on the way out) and exits 143.
 
 from __future__ import annotations
 
+import _thread
 import argparse
 import gc
 import importlib
 import os
 import signal
 import sys
+import threading
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -133,19 +135,59 @@ def user_warnings(debug: bool = False) -> Iterator[list[str]]:
         yield printed
 
 
+#: how long after a signal lost in a callback it is delivered again (the hook returns in
+#: microseconds)
+REDELIVER_S = 0.01
+
+
 def _raise_terminated(signum: int, frame: Any) -> None:
     raise Terminated()
+
+
+@contextmanager
+def signals_unwind() -> Iterator[None]:
+    """SIGTERM raises Terminated in the main thread (Ctrl-C raises KeyboardInterrupt).
+
+    A signal's handler runs wherever the main thread is, and where that is a callback
+    Python calls for itself (a weak reference's, the import system's, a `__del__`), the
+    exception cannot go up: Python prints it as "Exception ignored" with a traceback
+    and goes on. The hook for those (`sys.unraisablehook`) delivers the signal again,
+    silently, a moment later (from another thread: in the hook it would be lost too),
+    to whatever the main thread runs then."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread (e.g. called from a test's thread)
+        yield
+        return
+    hook = sys.unraisablehook
+
+    def again(unraisable: Any) -> None:
+        caught = unraisable.exc_value
+        if isinstance(caught, (Terminated, KeyboardInterrupt)):
+            signum = signal.SIGTERM if isinstance(caught, Terminated) else signal.SIGINT
+            later = threading.Timer(REDELIVER_S, _thread.interrupt_main, args=(signum,))
+            later.daemon = True
+            later.start()
+            return
+        hook(unraisable)
+
+    sys.unraisablehook = again
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+        signal.signal(signal.SIGTERM, previous)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit status (`console_main` exits with it)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    with signals_unwind():
+        return _main(argv)
+
+
+def _main(argv: list[str]) -> int:
     debug = "--debug" in argv
-    previous = None
-    try:
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread (e.g. called from a test's thread)
-        previous = None
     try:
         args = build_parser(argv).parse_args(argv)
         with user_warnings(args.debug) as printed:
@@ -163,9 +205,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         status, line = _error_line(err)
         print(line, file=sys.stderr)
         return status
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 def _error_line(err: Exception) -> tuple[int, str]:
