@@ -242,7 +242,12 @@ def console_main() -> None:
     finalizers still run.
     """
     prepare_process()
-    status = main()
+    try:
+        status = main()
+    except Terminated:  # (the signal came while `main` was putting its handler back)
+        status = EXIT_TERMINATED
+    except KeyboardInterrupt:
+        status = EXIT_INTERRUPTED
     gc.freeze()
     sys.exit(status)
 
