@@ -68,11 +68,16 @@ def parse_units(units: CheckUnits, filename: str) -> list[MotionInstruction]:
     try:
         return units.parse(filename)[1]
     except (RapidfixError, ValueError) as err:
-        raise RapidSemanticError(
-            f"the rewritten program does not parse ({err}); nothing was written",
-            file=filename,
-            hint="please report this as a rapidfix bug",
-        ) from None
+        raise _not_parsed(err, filename) from None
+
+
+def _not_parsed(err: Exception, filename: str) -> RapidSemanticError:
+    """What stops a rewrite whose rewritten parts do not parse: a bug of the rewrite."""
+    return RapidSemanticError(
+        f"the rewritten program does not parse ({err}); nothing was written",
+        file=filename,
+        hint="please report this as a rapidfix bug",
+    )
 
 
 def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
@@ -90,9 +95,7 @@ def read_back(units: CheckUnits, filename: str, expected: Expected) -> ReadBack:
     try:  # the approach points' statements, one of each shape
         units.parse_shapes(filename)
     except (RapidfixError, ValueError) as err:
-        raise RapidSemanticError(
-            f"the rewritten program does not parse ({err}); nothing was written",
-            file=filename, hint="please report this as a rapidfix bug") from None
+        raise _not_parsed(err, filename) from None
     found = _read_columns(units, expected, filename)
     if found is None:
         text, order = units.text()
