@@ -53,7 +53,7 @@ from rapidfix.postprocess.planning import ProgramPlan, plan_program
 from rapidfix.postprocess.refinement import START_UNKNOWN, PathRefinement, refine_paths
 from rapidfix.postprocess.resolve import Declarations, Targets
 from rapidfix.postprocess.verify import predicted_deviation, read_back
-from rapidfix.rapid import Editor, Program, ends_its_line, foreign_target_calls, parse_owned
+from rapidfix.rapid import Editor, Program, foreign_target_calls, parse_owned
 
 EMIT_CHOICES = ("jointtargets", "robtargets")
 #: programs of this much kernel work or more are solved with the compiled kernels (numba):
@@ -480,9 +480,9 @@ def _rewrite(handed: list[Program], digest: str, filename: str, comp: Compensato
         at = program.modules[0].header_end
         block = header.render(_module_indent(program), "\n")
         # the block is line comments: what follows on the MODULE line (code, or a comment
-        # the header would take in) goes on a line of its own
-        editor.insert(at, block if ends_its_line(program.text, at, comment=False)
-                      else block + "\n")
+        # the header would take in) goes on a line of its own, after the header and any
+        # declarations inserted there
+        editor.insert_lines_first(at, block)
         units.comments.extend(header.lines())
     moves_total, inserted = len(planned.sites), emission.inserted
     before = _predicted_before(comp, planned.targets, refined.solved)

@@ -38,6 +38,34 @@ def _ends_its_line(text: str, offset: int, line_end: int, comment: bool = True) 
     return after >= line_end or text[after] in ("!\r\n" if comment else "\r\n")
 
 
+def _first_ahead(order: np.ndarray, start: np.ndarray, end: np.ndarray,
+                 first: list[int]) -> np.ndarray:
+    """`order` (the edits by start and end) with each edit of `first` moved ahead of
+    the other insertions at its offset (they lead its run: an insertion ends where it
+    starts)."""
+    moved = order.tolist()
+    for edit in first:
+        at = moved.index(edit)
+        lead = int(np.searchsorted(start, start[at]))
+        if end[lead] == start[lead] and lead < at:
+            moved.insert(lead, moved.pop(at))
+    return np.asarray(moved, dtype=order.dtype)
+
+
+def _join_mid_line(order: np.ndarray, start: np.ndarray, mid_line: list[int],
+                   texts: list[str | _Lines]) -> None:
+    """Lines inserted after one anchor that code follows on its line, by several
+    insertions (a filtered robtarget, then a jointtarget, after one declaration): each
+    ends the line for that code, so all but the last at a place lose that line break
+    (else an empty line stands between them). `order` and `start` are the edits by
+    start, `texts` their texts in that order (changed in place)."""
+    marked = np.zeros(len(order), dtype=bool)
+    marked[np.isin(order, mid_line)] = True
+    meets = np.flatnonzero(marked[:-1] & marked[1:] & (start[:-1] == start[1:]))
+    for n in meets.tolist():
+        texts[n] = texts[n][:-1]  # type: ignore[index]
+
+
 def ends_its_line(text: str, offset: int, comment: bool = True) -> bool:
     """Whether nothing but blanks (or a comment, with `comment`) follows `offset` on its
     line. New lines inserted there go after the line; else what follows `offset` goes on
@@ -66,6 +94,11 @@ class Editor:
         # new lines inserted after an anchor are kept as (indentation, text or lines)
         # until the output is rendered, not as one more string (see `insert_lines_after`)
         self._texts: list[str | _Lines] = []
+        # the edits that insert new lines right after an anchor code follows on its line
+        # (each "\n" + lines + "\n"): where two meet, the first's last line break goes
+        self._mid_line: list[int] = []
+        # the insertions that go ahead of the others at their offset (`insert_lines_first`)
+        self._first: list[int] = []
 
     # ------------------------------------------------------------ primitives
     def replace(self, span: Span | tuple[int, int], text: str) -> None:
@@ -100,6 +133,17 @@ class Editor:
     def insert(self, offset: int, text: str) -> None:
         """Insert `text` at a character offset."""
         self.replace((offset, offset), text)
+
+    def insert_lines_first(self, offset: int, text: str) -> None:
+        """Insert `text`, lines that each begin with their line break, at `offset`, ahead
+        of every other insertion there (a file's header after its MODULE line). Where code
+        or a comment follows `offset` on its line, that goes on a line of its own after
+        them (and after any lines inserted there for an anchor that code follows)."""
+        mid_line = not ends_its_line(self.program.text, offset, comment=False)
+        if mid_line:
+            self._mid_line.append(len(self._texts))
+        self._first.append(len(self._texts))
+        self.insert(offset, text + "\n" if mid_line else text)
 
     def insert_after(self, span: Span, text: str) -> None:
         """Insert `text` right after `span` (same line)."""
@@ -145,6 +189,7 @@ class Editor:
                 # lines go right after the anchor, and that code on a line of its own
                 if type(text) is list:
                     text = "\n".join(text)
+                self._mid_line.append(len(self._texts) + len(positions))
                 positions.append(stop)
                 bodies.append("".join(f"\n{pad}{part}" if part else "\n"
                                       for part in text.split("\n")) + "\n")
@@ -254,7 +299,12 @@ class Editor:
                 after = int(np.argmax(clash)) + 1
                 where = Span(int(start[after]), int(end[after]), self._source)
                 raise EditConflict(f"edits overlap at {where.location}")
-        return start.tolist(), end.tolist(), list(map(self._texts.__getitem__, order.tolist()))
+        if self._first:
+            order = _first_ahead(order, start, end, self._first)
+        texts = list(map(self._texts.__getitem__, order.tolist()))
+        if self._mid_line:
+            _join_mid_line(order, start, self._mid_line, texts)
+        return start.tolist(), end.tolist(), texts
 
     def text(self) -> str:
         """The edited text (decoded)."""

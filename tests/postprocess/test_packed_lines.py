@@ -134,6 +134,10 @@ def test_small_layouts_keep_their_code_and_comments(comp):
             result = rewrite_source(text.encode(), "m.mod", comp, options)
             assert result.moves_compensated == len(source.motions), (name, mode)
             out = parse_program(result.data, "out.mod")  # the whole output parses
+            # new lines after a mid-line anchor stand together: no empty line among them
+            assert out.text.count("\n\n") == text.count("\n\n"), (name, mode)
+            # and the header comes first, right after the MODULE line
+            assert "rapidfix-compensated" in out.text.splitlines()[1], (name, mode)
             assert len(out.motions) >= len(source.motions), (name, mode)
             header = read_header(out.text)
             assert header is not None and header.summary.endswith("left as they were")

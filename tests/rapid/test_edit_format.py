@@ -104,6 +104,24 @@ def test_insertions_at_one_offset_keep_call_order():
     assert editor.text() == "MODULE M\nVAR num a;\nVAR num b;\nENDMODULE"
 
 
+def test_lines_after_one_anchor_code_follows_stand_together():
+    """New lines after an anchor that code follows on its line go right after it, and
+    that code on a line of its own: given by several calls, they stand together (no
+    empty line between them), in the order of the calls, after any anchor."""
+    text = (f"MODULE M\n  CONST robtarget p1:=[[1,2,3],[0,0,1,0],[0,0,0,0],{UNUSED}];"
+            " PROC main() MoveL p1, v100, z10, tool0; ENDPROC ENDMODULE\n")
+    program = parse_program(text)
+    anchor = program.declarations[0].span
+    editor = Editor(program)
+    editor.insert_line_after(anchor, "CONST num a:=1;")
+    editor.insert_lines_after([(anchor.start, anchor.end)], [["CONST num b:=2;", "! b"]])
+    editor.insert_line_after(anchor, "CONST num c:=3;")
+    rest = editor.text().partition("];\n")[2]
+    assert rest == ("  CONST num a:=1;\n  CONST num b:=2;\n  ! b\n  CONST num c:=3;\n"
+                    " PROC main() MoveL p1, v100, z10, tool0; ENDPROC ENDMODULE\n")
+    assert len(parse_program(editor.text()).declarations) == 4
+
+
 def test_text_that_cannot_be_encoded_is_a_clear_error():
     program = parse_program(CRLF_CP1252)
     editor = Editor(program)
