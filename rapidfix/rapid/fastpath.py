@@ -509,7 +509,31 @@ _WS_CHARS = " \t\f\v\r\n\x1a"
 def _call_node(text: str, start: int) -> s.Call:
     """The Call node of checked function call text `Name(args)` at `start`: its first
     argument, and the rest as a tail read once per distinct text (a LazyFunctionCall,
-    like split_calls' LazyCall: `Offs(p1,0,0,10)` and `Offs(p2,0,0,10)` share `,0,0,10)`)."""
+    like split_calls' LazyCall: `Offs(p1,0,0,10)` and `Offs(p2,0,0,10)` share `,0,0,10)`).
+
+    A text of a shape read before (`shape_key`: `Offs(RelTool(Offs(p8,0,0,-5),...),...)`
+    after `p7`'s) is split where that one was, its values read from it (`_reshaped`),
+    without matching its arguments again: calls of calls cost a pattern match a level."""
+    key = shape_key(text)
+    if key is not None:
+        known = _CALL_SHAPES.get(key)
+        if known:
+            node, at = known
+            try:
+                return _reshaped(node, start - at, text, at)
+            except _NoShape:
+                _CALL_SHAPES[key] = ()  # (it holds what is not moved: read in full)
+                key = None
+        elif known is not None:
+            key = None
+    call = _split_call(text, start)
+    if key is not None:
+        _CALL_SHAPES.keep(key, (call, start))
+    return call
+
+
+def _split_call(text: str, start: int) -> s.LazyFunctionCall:
+    """`_call_node` of a text read in full."""
     open_at = text.index("(")
     name = text[:open_at].rstrip(_WS_CHARS)
     first = _INNER_PIECE.compiled.match(text, open_at + 1)
@@ -756,7 +780,26 @@ _RESHAPERS: dict[type, Callable[[Any, int, str, int], Any]] = {
                                       _intern(t[n.start - a:n.start - a + len(n.name)]),
                                       [_reshaped(arg, d, t, a) for arg in n.args]),
     s.Argument: _reshaped_argument,
+    s.LazyFunctionCall: lambda n, d, t, a: _reshaped_call(n, d, t, a),
 }
+
+
+def _reshaped_call(n: s.LazyFunctionCall, d: int, text: str, at: int) -> s.LazyFunctionCall:
+    """A LazyFunctionCall made by `_split_call`, moved and read from `text` (see
+    `_reshaped`): its first argument's value reshaped, its tail the one of its new text.
+    An inline target first is read in full (its items are shared by text, see
+    `_inline_target`)."""
+    head = n.head
+    if head is not None:
+        value = head.value
+        if type(value) is s.NumericAggregate or type(value) is s.Aggregate:
+            raise _NoShape("aggregate")
+        value = _reshaped(value, d, text, at)
+        head = s.Argument(value.start, value.end, "required", None, value)
+    name_at, tail_at = n.start - at, n.shift - at
+    return s.LazyFunctionCall(n.start + d, n.end + d,
+                              _intern(text[name_at:name_at + len(n.name)]), head,
+                              _inner_tail(text[tail_at:n.end - at]), n.shift + d)
 
 
 def _grouped_read(text: str, start: int) -> s.Aggregate | None:
@@ -1033,6 +1076,9 @@ _READ: Memo = Memo(TAIL_LIMIT)
 # The shape of an expression text (its digits made 1s) -> its nodes and where the text
 # stood (see _read_by_shape), or None for a shape whose nodes are read in full.
 _SHAPES: Memo = Memo(TAIL_LIMIT)
+# The shape of a function call's text -> its node and where it stood (see _call_node), or
+# () for a shape read in full.
+_CALL_SHAPES: Memo = Memo(TAIL_LIMIT)
 # The optional arguments before a call's first required one (see split_calls), by text
 # and by shape.
 _LEADS: Memo = Memo(TAIL_LIMIT)
@@ -1429,8 +1475,8 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _LEADS, _LEAD_SHAPES,
-                 _ENTRIES, _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _CALL_SHAPES, _LEADS,
+                 _LEAD_SHAPES, _ENTRIES, _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

@@ -532,6 +532,41 @@ def assert_parses_as_plain(text: str) -> None:
     assert shape(parse_text(text)) == expected
 
 
+# Calls of calls whose texts differ only in their digits (`#`): the later ones are split
+# where the first of their shape was (fastpath._call_node), their values read from them.
+CALL_SHAPES = [
+    "MoveL Offs(RelTool(Offs(p#,#,0,-#),0,0,#\\Rz:=#),nDx*#,0,#),v100,z1,t;",
+    "MoveJ RelTool( Offs( RelTool(p#, 0, #, 5), 0, -#.#, 0), 0, 0, -#E#), v200, z5, t;",
+    "Foo Fn#(Gn#(path{#},#),#);",
+    "Foo f(g(grid{#,#}.trans.x*#,-#),#), h(k(p#.trans,#) \\A:=#);",
+    "Foo f(g(h(#)),#);",
+    "Foo Offs(RelTool([[#,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],0,0,#),0,0,#);",
+    "Foo Offs(RelTool(p#,0,0,#),0,0,#) \\B:=f(g(#)), #;",
+    "Foo f(g(0x#),#), f(g(\"#\"),#);",
+]
+
+
+@st.composite
+def reshaped_calls(draw: st.DrawFn) -> str:
+    digits = st.text("0123456789", min_size=1, max_size=3)
+    body = []
+    for _ in range(draw(st.integers(2, 6))):
+        template = draw(st.sampled_from(CALL_SHAPES))
+        body.append(_filled(template, draw, digits))
+    return routine(*body)
+
+
+def _filled(template: str, draw: st.DrawFn, digits: st.SearchStrategy[str]) -> str:
+    pieces = template.split("#")
+    return pieces[0] + "".join(draw(digits) + piece for piece in pieces[1:])
+
+
+@settings(max_examples=100, deadline=None)
+@given(reshaped_calls())
+def test_calls_of_the_same_shape_parse_as_with_the_plain_grammar(text):
+    assert_parses_as_plain(text)
+
+
 # ------------------------------------------------------- comments inside statements
 def _blanked_by_hand(text: str) -> str:
     """blank_comments, written as a lexer reads the text character by character: a
