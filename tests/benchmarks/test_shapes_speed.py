@@ -82,25 +82,28 @@ def test_parse_more_shapes():
     _parse_rows(more or list(MORE_SHAPES), more_program)
 
 
-def _parse_rows(shapes, make):
+def _parse_rows(shapes, make, size=None, count=None, suffix=None):
+    """Parse + model of each shape's program of about `size` lines (LINES) made by `make`
+    against plain Lark on the same file; `count(shape, data)` its lines (the newlines),
+    `suffix(shape)` its file name's end (`_suffix`)."""
     plain = Lark(grammar_text(), parser="lalr", lexer="contextual", cache=True)
     parse_program("MODULE M\nENDMODULE\n")
     rows = []
     for shape in shapes:
-        data = make(shape, LINES).encode()
-        lines = data.count(b"\n")
+        data = make(shape, size or LINES).encode()
+        lines = data.count(b"\n") if count is None else count(shape, data)
         text = decode_source(data, "x").text
         tree, base = _cpu(plain.parse, text)
         del tree
         best = None
         for _ in range(2):
-            program, ours = _cpu(parse_program, data, f"x{_suffix(shape)}")
+            program, ours = _cpu(parse_program, data, f"x{(suffix or _suffix)(shape)}")
             assert program.motions
             assert program.to_bytes() == data
             del program
             best = ours if best is None else min(best, ours)
         rows.append((shape, lines, lines / base, lines / best, base / best))
-    print(f"\nparse + model, lines/s of CPU time, {LINES:,} lines per shape")
+    print(f"\nparse + model, lines/s of CPU time, {size or LINES:,} lines per shape")
     print(f"{'shape':10s} {'lines':>8s} {'plain Lark':>11s} {'parse_program':>14s} {'ratio':>6s}")
     for shape, lines, base, ours, ratio in rows:
         print(f"{shape:10s} {lines:8,d} {base:11,.0f} {ours:14,.0f} {ratio:5.1f}x")
