@@ -665,6 +665,10 @@ def _read(text: str, start: int) -> s.Expr:
         if grouped is not None:
             return grouped
     if len(text) > READ_KEPT_CHARS:
+        if text[0] == "[" and '"' in text:
+            rows = _rows_read(text, start)
+            if rows is not None:
+                return rows
         try:
             return read_expression(text, start, condition=True)
         except NotRead:
@@ -684,6 +688,47 @@ def _read(text: str, start: int) -> s.Expr:
 
 #: the longest expression text _read keeps (see there)
 READ_KEPT_CHARS = 256
+
+# A row of a table of records: an aggregate of values, strings among them, holding
+# aggregates one level down (`[17,"S17",3.5,[2,1,0]]`); and a table of such rows.
+_ROW_TEXT = rf'\[(?:[^\[\]"]|{STRING}|\[(?:[^\[\]"]|{STRING})*\])*\]'
+_ROW = re.compile(_ROW_TEXT)
+_ROWS = re.compile(rf"\[{WS}*{_ROW_TEXT}(?:{WS}*,{WS}*{_ROW_TEXT})*{WS}*\]")
+
+
+def _rows_read(text: str, start: int) -> s.Aggregate | None:
+    """_read of a table of records (`[[17,"S17",3.5,[2,1,0]],[18,"S18",4.5,[3,2,0]],...]`,
+    strings in its rows), row by row: a row of a shape read before (its digits made 1s,
+    in its strings too, where a digit changes a value but never where the row splits) is
+    that row's nodes at the new place with the new values (`_reshaped`); None for any
+    other text, and where a row does not read (then the whole is read in full)."""
+    if _ROWS.fullmatch(text) is None:
+        return None
+    items: list[s.Expr] = []
+    for m in _ROW.finditer(text, 1):
+        row, at = m.group(), start + m.start()
+        key = (None if _RADIX(row) is not None
+               else row.encode("utf-8", "surrogatepass").translate(_ONES))
+        known = _ROW_SHAPES.get(key) if key is not None else None
+        if known:
+            node, was = known
+            try:
+                items.append(_reshaped(node, at - was, row, was))
+                continue
+            except _NoShape:
+                _ROW_SHAPES[key] = ()  # (it holds what is not moved: read in full)
+                key = None
+        elif known is not None:
+            key = None
+        try:
+            node = read_expression(row, at, condition=True)
+        except NotRead:
+            return None
+        if key is not None:
+            _ROW_SHAPES.keep(key, (node, at))
+        items.append(node)
+    return s.Aggregate(start, start + len(text), items)
+
 
 # Every digit made a 1: texts that differ only in their digits (`Offs(p17,0,0,-nZ*2)`,
 # `Offs(p18,0,0,-nZ*3)`) have one shape.
@@ -759,6 +804,9 @@ _RESHAPERS: dict[type, Callable[[Any, int, str, int], Any]] = {
                                             _intern(t[n.start - a:n.end - a])),
     s.Number: _reshaped_number,
     s.Bool: lambda n, d, t, a: s.Bool(n.start + d, n.end + d, n.value),
+    # (only in a table's rows, whose shapes keep their strings: `_rows_read`)
+    s.String: lambda n, d, t, a: s.String(n.start + d, n.end + d,
+                                          string_value(t[n.start - a:n.end - a])),
     s.NumericAggregate: lambda n, d, t, a: s.NumericAggregate(
         n.start + d, n.end + d, numeric_aggregate_value(t[n.start - a:n.end - a])),
     s.Binary: lambda n, d, t, a: s.Binary(n.start + d, n.end + d, n.op,
@@ -1077,8 +1125,9 @@ _READ: Memo = Memo(TAIL_LIMIT)
 # stood (see _read_by_shape), or None for a shape whose nodes are read in full.
 _SHAPES: Memo = Memo(TAIL_LIMIT)
 # The shape of a function call's text -> its node and where it stood (see _call_node), or
-# () for a shape read in full.
+# () for a shape read in full; the same for the rows of tables (see _rows_read).
 _CALL_SHAPES: Memo = Memo(TAIL_LIMIT)
+_ROW_SHAPES: Memo = Memo(TAIL_LIMIT)
 # The optional arguments before a call's first required one (see split_calls), by text
 # and by shape.
 _LEADS: Memo = Memo(TAIL_LIMIT)
@@ -1475,8 +1524,9 @@ def forget_texts() -> None:
     """Empty the texts the fast path keeps across files (call tails and their values,
     aggregate rests and number groups): their memory back, and the next file read from a
     known start."""
-    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _CALL_SHAPES, _LEADS,
-                 _LEAD_SHAPES, _ENTRIES, _AGGREGATE_RESTS, _RESTS, _PLAIN_RESTS, _GROUP_CACHE):
+    for memo in (_TAILS, _INNER_TAILS, _TAIL_SHAPES, _READ, _SHAPES, _CALL_SHAPES,
+                 _ROW_SHAPES, _LEADS, _LEAD_SHAPES, _ENTRIES, _AGGREGATE_RESTS, _RESTS,
+                 _PLAIN_RESTS, _GROUP_CACHE):
         memo.clear()
 
 

@@ -567,6 +567,33 @@ def test_calls_of_the_same_shape_parse_as_with_the_plain_grammar(text):
     assert_parses_as_plain(text)
 
 
+# Rows of tables of records (`#`: digits): a table longer than fastpath.READ_KEPT_CHARS is
+# read row by row, a row of a shape read before made from it (fastpath._rows_read).
+ROW_SHAPES = [
+    '[#,"S#",#.#,[#,#,0]]',
+    '[ -#, "a[#]b", [#,-#.#E-#], nX# ]',
+    '["say ""#""", "\\#A", TRUE, [#, "x,#"]]',
+    '[#,"",0x#,[-#]]',
+    '[#, "p#"]',
+]
+
+
+@st.composite
+def record_table(draw: st.DrawFn) -> str:
+    digits = st.text("0123456789", min_size=1, max_size=3)
+    rows = [_filled(draw(st.sampled_from(ROW_SHAPES)), draw, digits)
+            for _ in range(draw(st.integers(12, 30)))]
+    gap = draw(st.sampled_from([",", ", ", ",\n    ", " ,\r\n\t", ",\n! a row\n"]))
+    return module(f"CONST seam table{{{len(rows)}}}:=[" + gap.join(rows) + "];",
+                  "PROC main()", "  MoveL table{1}.p, v100, z1, tool0;", "ENDPROC")
+
+
+@settings(max_examples=60, deadline=None)
+@given(record_table())
+def test_tables_of_records_parse_as_with_the_plain_grammar(text):
+    assert_parses_as_plain(text)
+
+
 # ------------------------------------------------------- comments inside statements
 def _blanked_by_hand(text: str) -> str:
     """blank_comments, written as a lexer reads the text character by character: a
