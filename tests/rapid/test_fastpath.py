@@ -546,19 +546,18 @@ CALL_SHAPES = [
 ]
 
 
+DIGITS = st.text("0123456789", min_size=1, max_size=3)
+
+
+def _filled(draw: st.DrawFn, templates: list[str]) -> str:
+    """One of `templates` with each `#` drawn digits."""
+    pieces = draw(st.sampled_from(templates)).split("#")
+    return pieces[0] + "".join(draw(DIGITS) + piece for piece in pieces[1:])
+
+
 @st.composite
 def reshaped_calls(draw: st.DrawFn) -> str:
-    digits = st.text("0123456789", min_size=1, max_size=3)
-    body = []
-    for _ in range(draw(st.integers(2, 6))):
-        template = draw(st.sampled_from(CALL_SHAPES))
-        body.append(_filled(template, draw, digits))
-    return routine(*body)
-
-
-def _filled(template: str, draw: st.DrawFn, digits: st.SearchStrategy[str]) -> str:
-    pieces = template.split("#")
-    return pieces[0] + "".join(draw(digits) + piece for piece in pieces[1:])
+    return routine(*(_filled(draw, CALL_SHAPES) for _ in range(draw(st.integers(2, 6)))))
 
 
 @settings(max_examples=100, deadline=None)
@@ -580,9 +579,7 @@ ROW_SHAPES = [
 
 @st.composite
 def record_table(draw: st.DrawFn) -> str:
-    digits = st.text("0123456789", min_size=1, max_size=3)
-    rows = [_filled(draw(st.sampled_from(ROW_SHAPES)), draw, digits)
-            for _ in range(draw(st.integers(12, 30)))]
+    rows = [_filled(draw, ROW_SHAPES) for _ in range(draw(st.integers(12, 30)))]
     gap = draw(st.sampled_from([",", ", ", ",\n    ", " ,\r\n\t", ",\n! a row\n"]))
     return module(f"CONST seam table{{{len(rows)}}}:=[" + gap.join(rows) + "];",
                   "PROC main()", "  MoveL table{1}.p, v100, z1, tool0;", "ENDPROC")
