@@ -43,13 +43,13 @@ def _first_ahead(order: np.ndarray, start: np.ndarray, end: np.ndarray,
     """`order` (the edits by start and end) with each edit of `first` moved ahead of
     the other insertions at its offset (they lead its run: an insertion ends where it
     starts)."""
-    moved = order.tolist()
     for edit in first:
-        at = moved.index(edit)
+        at = int(np.flatnonzero(order == edit)[0])
         lead = int(np.searchsorted(start, start[at]))
-        if end[lead] == start[lead] and lead < at:
-            moved.insert(lead, moved.pop(at))
-    return np.asarray(moved, dtype=order.dtype)
+        if lead < at and end[lead] == start[lead]:
+            order = np.concatenate((order[:lead], order[at:at + 1], order[lead:at],
+                                    order[at + 1:]))
+    return order
 
 
 def _join_mid_line(order: np.ndarray, start: np.ndarray, mid_line: list[int],
