@@ -514,22 +514,7 @@ def _call_node(text: str, start: int) -> s.Call:
     A text of a shape read before (`shape_key`: `Offs(RelTool(Offs(p8,0,0,-5),...),...)`
     after `p7`'s) is split where that one was, its values read from it (`_reshaped`),
     without matching its arguments again: calls of calls cost a pattern match a level."""
-    key = shape_key(text)
-    if key is not None:
-        known = _CALL_SHAPES.get(key)
-        if known:
-            node, at = known
-            try:
-                return _reshaped(node, start - at, text, at)
-            except _NoShape:
-                _CALL_SHAPES[key] = ()  # (it holds what is not moved: read in full)
-                key = None
-        elif known is not None:
-            key = None
-    call = _split_call(text, start)
-    if key is not None:
-        _CALL_SHAPES.keep(key, (call, start))
-    return call
+    return _by_shape(_CALL_SHAPES, shape_key(text), text, start, _split_call)
 
 
 def _split_call(text: str, start: int) -> s.LazyFunctionCall:
@@ -706,27 +691,12 @@ def _rows_read(text: str, start: int) -> s.Aggregate | None:
         return None
     items: list[s.Expr] = []
     for m in _ROW.finditer(text, 1):
-        row, at = m.group(), start + m.start()
-        key = (None if _RADIX(row) is not None
-               else row.encode("utf-8", "surrogatepass").translate(_ONES))
-        known = _ROW_SHAPES.get(key) if key is not None else None
-        if known:
-            node, was = known
-            try:
-                items.append(_reshaped(node, at - was, row, was))
-                continue
-            except _NoShape:
-                _ROW_SHAPES[key] = ()  # (it holds what is not moved: read in full)
-                key = None
-        elif known is not None:
-            key = None
+        row = m.group()
         try:
-            node = read_expression(row, at, condition=True)
+            items.append(_by_shape(_ROW_SHAPES, shape_key(row, in_strings=True), row,
+                                   start + m.start(), _read_in_full))
         except NotRead:
             return None
-        if key is not None:
-            _ROW_SHAPES.keep(key, (node, at))
-        items.append(node)
     return s.Aggregate(start, start + len(text), items)
 
 
@@ -738,10 +708,11 @@ _ONES = bytes.maketrans(b"0123456789", b"1111111111")
 _RADIX = re.compile(r"0[xXbBoO]").search
 
 
-def shape_key(text: str) -> bytes | None:
+def shape_key(text: str, in_strings: bool = False) -> bytes | None:
     """`text` with every digit made a 1, or None where its digits decide how it is read
-    (after a radix prefix, in a string)."""
-    if '"' in text or _RADIX(text) is not None:
+    (after a radix prefix; in a string, unless `in_strings`: a table's rows, whose
+    strings the reshapers decode again)."""
+    if (not in_strings and '"' in text) or _RADIX(text) is not None:
         return None
     return text.encode("utf-8", "surrogatepass").translate(_ONES)
 
@@ -759,19 +730,31 @@ def _read_by_shape(text: str, start: int) -> s.Expr:
     from one read before are that one's nodes at the new place, with the numbers and
     names taken from the new text (_reshaped): a program's expressions often differ only
     in the target they name or the numbers they hold. NotRead as read_expression."""
-    key = shape_key(text)
+    return _by_shape(_SHAPES, shape_key(text), text, start, _read_in_full)
+
+
+def _read_in_full(text: str, start: int) -> s.Expr:
+    return read_expression(text, start, condition=True)
+
+
+def _by_shape(memo: Memo, key: bytes | None, text: str, start: int,
+              read: Callable[[str, int], Any]) -> Any:
+    """`read(text, start)`, or, where `memo` holds a node of the same shape (`key`, None
+    for a text without one), that node moved to `start` and read from `text`
+    (`_reshaped`). `memo`: shape -> (node, where its text stood), or None for a shape
+    whose nodes hold what is not moved (then read in full)."""
     if key is not None:
-        shape = _SHAPES.get(key)
-        if shape is not None:
-            node, at = shape
+        known = memo.get(key)
+        if known is not None:
+            node, at = known
             try:
                 return _reshaped(node, start - at, text, at)
             except _NoShape:
-                _SHAPES[key] = None  # (it holds what cannot be moved: read in full)
+                memo[key] = None
                 key = None
-    node = read_expression(text, start, condition=True)
-    if key is not None and key not in _SHAPES:
-        _SHAPES.keep(key, (node, start))
+    node = read(text, start)
+    if key is not None and key not in memo:
+        memo.keep(key, (node, start))
     return node
 
 
@@ -1125,7 +1108,7 @@ _READ: Memo = Memo(TAIL_LIMIT)
 # stood (see _read_by_shape), or None for a shape whose nodes are read in full.
 _SHAPES: Memo = Memo(TAIL_LIMIT)
 # The shape of a function call's text -> its node and where it stood (see _call_node), or
-# () for a shape read in full; the same for the rows of tables (see _rows_read).
+# None for a shape read in full; the same for the rows of tables (see _rows_read).
 _CALL_SHAPES: Memo = Memo(TAIL_LIMIT)
 _ROW_SHAPES: Memo = Memo(TAIL_LIMIT)
 # The optional arguments before a call's first required one (see split_calls), by text
