@@ -50,12 +50,18 @@ def body_span(err: UnexpectedInput) -> tuple[int, int] | None:
     interactive = getattr(err, "interactive_parser", None)
     if interactive is None:
         return None
+    read: list = []  # the items of a token fast_blocks read, not yet reduced
     for value in reversed(interactive.parser_state.value_stack):
         if getattr(value, "data", "").startswith("___body_star"):
-            items = value.children
-            if len(items) < 2:
-                return None
-            return items[0].start, items[-1].start
+            items = [*value.children, *read]
+        elif read and getattr(value, "type", "") in ("FAST_PROC", "FAST_FUNC"):
+            items = read  # the token is the body's first
+        else:
+            read = list(getattr(value, "nodes", ()))
+            continue
+        if len(items) < 2:
+            return None
+        return items[0].start, items[-1].start
     return None
 
 
@@ -127,6 +133,9 @@ def _took_keyword(err: UnexpectedInput, text: str, at: int) -> bool:
     if interactive is None:
         return False
     for value in interactive.parser_state.value_stack:
+        nodes = getattr(value, "nodes", None)  # a token fast_blocks read: its items
+        if nodes:
+            value = Tree("_read", nodes)
         if isinstance(value, Token):
             if value.start_pos == at and value.type == value.upper():
                 return True

@@ -69,7 +69,7 @@ from typing import Any
 from lark import Lark, Token, Tree, v_args
 from lark.exceptions import UnexpectedInput
 
-from rapidfix.rapid import fast_expressions
+from rapidfix.rapid import fast_blocks, fast_expressions
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.error_window import confirms, error_offset, window
 from rapidfix.rapid.fast_expressions import (
@@ -338,11 +338,16 @@ def grammar_extension(grammar: str) -> str:
             raise ValueError(f"rapid.lark no longer says {plain!r} ...; update fastpath")
     new_rules = [rule for rule, _, _ in _HEAD_RULES.values() if rule.startswith("fast_")]
     return (
-        f"\n%extend _statement: _fast_calls | {' | '.join(new_rules)}\n"
-        "%extend _module_item: _fast_decls\n"
+        f"\n%extend _statement: _fast_calls | {' | '.join(new_rules)} | _fast_block\n"
+        "%extend _module_item: _fast_decls | _fast_routines\n"
         "%override _body: (data_decl | _fast_decls | _statement)*\n"
         "_fast_calls: FAST_CALLS\n"
         "_fast_decls: FAST_DECLS\n"
+        # (given by fast_blocks' reader only: their patterns never match)
+        f"_fast_block: {fast_blocks.BLOCK}\n"
+        f"_fast_routines: {fast_blocks.ROUTINES}\n"
+        f"{fast_blocks.BLOCK}: /{fast_blocks.NEVER}/\n"
+        f"{fast_blocks.ROUTINES}: /{fast_blocks.NEVER}/\n"
         + "".join(f"{'' if rule.startswith('fast_') else '%extend '}{rule}: "
                   f"FAST_{kind.upper()} {rest}\n"
                   for kind, (rule, rest, _) in _HEAD_RULES.items())
@@ -1527,6 +1532,13 @@ class FastSyntaxBuilder(SyntaxBuilder):
         tok = children[0]
         return Tree("_fast_decls", split_decls(str(tok), tok.start_pos))
 
+    # the nodes fast_blocks' reader made for its token
+    def _fast_block(self, children: list[Any]) -> Tree:
+        return Tree("_fast_block", children[0].nodes)
+
+    def _fast_routines(self, children: list[Any]) -> Tree:
+        return Tree("_fast_routines", children[0].nodes)
+
     # The heads: the plain rules' nodes, their conditions read from the token's text.
     def fast_if_stmt(self, head: Token, *rest: Any) -> s.If:
         (cond,) = _head_parts(head, "if")
@@ -1667,13 +1679,17 @@ def cached_extension(grammar: str) -> str:
 def fast_parser() -> Lark:
     """The grammar's LALR parser with the fast terminals, building syntax nodes directly."""
     grammar = grammar_text()
-    return share_large_patterns(Lark(
+    builder = FastSyntaxBuilder()
+    parser = share_large_patterns(Lark(
         grammar + cached_extension(grammar),
         parser="lalr",
         lexer="contextual",
-        transformer=FastSyntaxBuilder(),
+        transformer=builder,
         cache=True,
     ))
+    lexer = parser.parser.lexer
+    lexer.lex = fast_blocks.BlockLexer(lexer, builder, split_calls, split_decls).lex
+    return parser
 
 
 # Whitespace and comments before a .prg's `%%%` header, and the header (rapid.lark's

@@ -66,4 +66,12 @@ def share_large_patterns(parser: Lark) -> Lark:
     return parser
 
 
-__all__ = ["LARGE_PATTERN", "share_large_patterns"]
+def compiled_alone(lexer: BasicLexer, name: str) -> Any:
+    """Terminal `name` of `lexer` compiled on its own as its scanners compile it (a large
+    one is then the very pattern they match with, compiled once)."""
+    terminal = lexer.terminals_by_name[name]
+    scanner = _SharingScanner([terminal], lexer.g_regex_flags, lexer.re, lexer.use_bytes)
+    return scanner._mres[0]
+
+
+__all__ = ["LARGE_PATTERN", "compiled_alone", "share_large_patterns"]

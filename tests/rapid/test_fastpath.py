@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from lark.exceptions import UnexpectedInput
 
 from rapidfix.exceptions import RapidSyntaxError
-from rapidfix.rapid import fastpath, parse_program
+from rapidfix.rapid import fast_blocks, fastpath, parse_program
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fastpath import (
     TAIL_LIMIT,
@@ -522,14 +522,22 @@ def test_random_programs_parse_as_with_the_plain_grammar(text):
 
 
 def assert_parses_as_plain(text: str) -> None:
-    """parse_text gives the plain grammar's tree, or refuses the text as it does."""
+    """parse_text gives the plain grammar's tree, or refuses the text as it does, with
+    fast_blocks' reader and with the fast terminals alone."""
     try:
         expected = plain_tree(text)
     except UnexpectedInput:
-        with pytest.raises(UnexpectedInput):
-            parse_text(text)
-        return
-    assert shape(parse_text(text)) == expected
+        expected = None
+    for read_ahead in (True, False):
+        fast_blocks.READ_AHEAD = read_ahead
+        try:
+            if expected is None:
+                with pytest.raises(UnexpectedInput):
+                    parse_text(text)
+            else:
+                assert shape(parse_text(text)) == expected
+        finally:
+            fast_blocks.READ_AHEAD = True
 
 
 # Calls of calls whose texts differ only in their digits (`#`): the later ones are split

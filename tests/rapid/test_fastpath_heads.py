@@ -19,20 +19,25 @@ from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, s
 from test_fastpath_expressions import expression
 from test_shared_operands import TARGET, TOOL, WOBJ, assert_same_model
 
-from rapidfix.rapid import fastpath
+from rapidfix.rapid import fast_blocks, fastpath
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.fast_expressions import NotRead, read_expression
 from rapidfix.rapid.fastpath import RUN_LIMIT, fast_parser
 
 
 def fast_tokens(text: str) -> list[str]:
-    """The types of the fast tokens the fast parser's lexer cuts `text` into."""
+    """The types of the fast tokens the fast parser's lexer cuts `text` into, without
+    fast_blocks' reader (which reads with these terminals, and reads on where they end)."""
     seen: list[str] = []
     parser = fast_parser()
-    interactive = parser.parse_interactive(text)
-    for token in interactive.iter_parse():
-        if token.type.startswith("FAST_"):
-            seen.append(token.type)
+    fast_blocks.READ_AHEAD = False
+    try:
+        interactive = parser.parse_interactive(text)
+        for token in interactive.iter_parse():
+            if token.type.startswith("FAST_"):
+                seen.append(token.type)
+    finally:
+        fast_blocks.READ_AHEAD = True
     return seen
 
 

@@ -1,0 +1,417 @@
+"""Whole compound statements, and whole routines, as one token each.
+
+The fast terminals (rapidfix.rapid.fastpath) take runs of simple statements and the
+head of each compound statement, but Lark's LALR loop still steps through every
+head, every `ELSE`, `ENDIF`, `ENDWHILE`, `DEFAULT`, `ENDTEST`, and every routine's
+head and `ENDPROC`, at some 20 µs a token. A program whose moves stand inside nested
+IF / WHILE / TEST blocks, or in many small routines, spent half its parse there.
+
+Here the contextual lexer is given a reader that runs ahead of it. Where the parser
+may take a statement and the text opens a compound statement, or where it may take a
+module item and the text opens a routine, the reader reads as far as it can read
+exactly, with the fast terminals' own patterns (runs of calls and of declarations,
+compound heads) and the keywords that close each construct, and builds the syntax
+nodes the grammar's rules build (through the fast path's own callbacks). What it read
+becomes one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
+(`_fast_block`, `_fast_routines`) splice them where the parser stands. A piece it cannot
+read (a label, a late call, an ERROR handler with numbers, a statement no fast terminal
+takes, a syntax error) ends the token before the outermost construct that holds it,
+and Lark reads on from there as before.
+
+A read that failed leaves what it did read complete (each run and each compound
+statement) by position, and the lexer hands those out when the parser reaches them,
+so a construct is read once whether or not its enclosing one could be; past the
+failure, reading ahead starts again. So nothing is read twice and the reader's work
+stays linear in the text. The grammar stays the definition of the language: the reader
+takes a construct only where every piece is one the lexer would give that parser state,
+and the equivalence tests parse everything both ways.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterator
+from types import SimpleNamespace
+from typing import Any
+
+from lark import Token
+from lark.exceptions import UnexpectedCharacters, UnexpectedToken
+
+from rapidfix.rapid.fast_expressions import LATIN1_LETTERS
+from rapidfix.rapid.lexer_patterns import compiled_alone
+
+BLOCK = "FAST_BLOCK"
+ROUTINES = "FAST_ROUTINES"
+# The two terminals' patterns: they never match, so only the reader gives these tokens.
+NEVER = r"\x00(?!)\x00"
+# The fast terminals the reader reads with.
+_HEADS = ("if", "elseif", "while", "for", "test", "case", "return", "proc", "func")
+PATTERNS = ("FAST_CALLS", "FAST_DECLS", *(f"FAST_{kind.upper()}" for kind in _HEADS))
+# The syntax builder's callbacks the reader makes nodes with.
+_CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_stmt",
+              "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
+              "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
+              "error_handler", "undo_handler", "backward_handler",
+              "_fast_routine")
+#: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
+#: those terminals see them)
+READ_AHEAD = True
+#: compound statements nested deeper than this are left to the parser (Python's stack)
+DEPTH_LIMIT = 48
+
+_WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
+# Whitespace and comments (a comment with its newline), as between fast statements.
+_GAP = re.compile(r"[ \t\f\v\r\n\x1a]*(?:![^\n]*\n[ \t\f\v\r\n\x1a]*)*")
+# The keywords that close a statement list, by first letter.
+_CLOSING = re.compile(
+    rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ERROR|UNDO|BACKWARD"
+    rf"|CASE|DEFAULT){_WORD_END}")
+_DEFAULT_COLON = re.compile(r"[ \t\f\v\r\n\x1a]*:")
+# The statements a fast head opens (or is: RETURN), by their first letter.
+_OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
+              for letter in (kind[0], kind[0].upper())}
+# The first letters of what the lexer has the reader try: a compound statement where
+# the parser may take a statement, a routine (or a declaration) where it may take a
+# module item.
+_STATEMENT_OPENERS = frozenset("IiWwFfTt")
+_ITEM_OPENERS = frozenset("PpFfLl")
+# The statements of a keyword and `;` (in error handlers mostly).
+_KEYWORD_STATEMENT = re.compile(
+    rf"(?i:(RETRY|TRYNEXT|EXIT|RAISE)){_WORD_END}[ \t\f\v\r\n\x1a]*;")
+# What follows ERROR when its handler names error numbers: left to the parser.
+_NUMBERS = re.compile(r"[ \t\f\v\r\n\x1a]*\(")
+
+
+class _Unread(Exception):
+    """The reader met something it does not read exactly, at `at`."""
+
+    def __init__(self, at: int) -> None:
+        self.at = at
+
+
+class _ReadToken(Token):
+    """A FAST_BLOCK or FAST_ROUTINES token, with the nodes read for it."""
+
+    __slots__ = ("nodes",)
+
+
+def _token(kind: str, text: str, start: int, end: int) -> Token:
+    return Token(kind, text[start:end], start_pos=start, end_pos=end)
+
+
+class Reader:
+    """Reads statement lists, compound statements and routines of one text.
+
+    `patterns` are the compiled fast terminals by name (FAST_CALLS, FAST_DECLS and the
+    heads); `split_calls` and `split_decls` turn a run's text into its nodes, `builder`
+    is the fast path's syntax builder (its callbacks make the compound nodes).
+    """
+
+    def __init__(self, text: str, patterns: dict[str, re.Pattern[str]], builder: Any,
+                 split_calls: Callable[[str, int], list], split_decls: Callable[[str, int], list]
+                 ) -> None:
+        self.text = text
+        self.calls = patterns["FAST_CALLS"].match
+        self.decls = patterns["FAST_DECLS"].match
+        self.heads = {kind: patterns[f"FAST_{kind.upper()}"].match for kind in _HEADS}
+        self.builder = builder
+        self.split_calls = split_calls
+        self.split_decls = split_decls
+        # complete pieces of a failed read, by the position before their gap:
+        # (their end, their nodes)
+        self.done: dict[int, tuple[int, list]] = {}
+        # where the last read failed: before it, only what that read completed is given
+        self.resume = -1
+        self.depth = 0
+
+    # ------------------------------------------------------------ statements
+    def statements(self, pos: int) -> tuple[list, int, str | None, int, int]:
+        """The statements from `pos` on: them, where the last ends, and the closing
+        keyword that ended them (upper case, its start and end; None and where reading
+        stopped when something else did)."""
+        text, gap, calls, heads, done = self.text, _GAP.match, self.calls, self.heads, self.done
+        out: list = []
+        while True:
+            known = done.get(pos)
+            if known is not None:
+                pos = known[0]
+                out += known[1]
+                continue
+            if pos < self.resume:  # before where a read failed: what it read only
+                return out, pos, None, pos, pos
+            at = gap(text, pos).end()
+            m = calls(text, at)
+            if m is not None:
+                nodes = self.split_calls(m.group(), at)
+                done[pos] = (m.end(), nodes)
+                out += nodes
+                pos = m.end()
+                continue
+            kind = _OPENED_BY.get(text[at:at + 1])
+            head = heads[kind](text, at) if kind is not None else None
+            if head is not None:
+                node = self.compound(kind, head) if kind != "return" else \
+                    self.builder.fast_return_stmt(_token("FAST_RETURN", text, at, head.end()))
+                done[pos] = (node.end, [node])
+                out.append(node)
+                pos = node.end
+                continue
+            keyword = _CLOSING.match(text, at)
+            if keyword is not None:
+                return out, pos, keyword.group().upper(), at, keyword.end()
+            plain = _KEYWORD_STATEMENT.match(text, at)
+            if plain is None:
+                return out, pos, None, at, at
+            word = plain.group(1).upper()
+            node = getattr(self.builder, f"{word.lower()}_stmt")(
+                _token(word, text, at, plain.end(1)), _token("SEMI", text, plain.end() - 1,
+                                                           plain.end()))
+            done[pos] = (node.end, [node])
+            out.append(node)
+            pos = node.end
+
+    def _body(self, pos: int, *closing: str) -> tuple[list, str, int, int]:
+        """Statements up to one of the `closing` keywords, or _Unread."""
+        body, _, word, at, end = self.statements(pos)
+        if word not in closing:
+            raise _Unread(at)
+        return body, word, at, end
+
+    def compound(self, kind: str, head: re.Match[str]) -> Any:
+        """The node of the compound statement whose head `head` matched, or _Unread."""
+        text, builder = self.text, self.builder
+        start = head.start()
+        if self.depth >= DEPTH_LIMIT:
+            raise _Unread(start)
+        self.depth += 1
+        try:
+            head_token = _token(f"FAST_{kind.upper()}", text, start, head.end())
+            if kind == "if":
+                rest: list = []
+                body, word, at, end = self._body(head.end(), "ELSEIF", "ELSE", "ENDIF")
+                rest += body
+                while word == "ELSEIF":
+                    clause = self.heads["elseif"](text, at)
+                    if clause is None:
+                        raise _Unread(at)
+                    body, word, next_at, end = self._body(clause.end(), "ELSEIF", "ELSE",
+                                                          "ENDIF")
+                    rest.append(builder.fast_elseif_clause(
+                        _token("FAST_ELSEIF", text, at, clause.end()), *body))
+                    at = next_at
+                if word == "ELSE":
+                    else_token = _token("ELSE", text, at, end)
+                    body, word, at, end = self._body(end, "ENDIF")
+                    rest.append(builder.else_clause(else_token, *body))
+                return builder.fast_if_stmt(head_token, *rest, _token("ENDIF", text, at, end))
+            if kind in ("while", "for"):
+                closing = "ENDWHILE" if kind == "while" else "ENDFOR"
+                body, _, at, end = self._body(head.end(), closing)
+                make = builder.fast_while_stmt if kind == "while" else builder.fast_for_stmt
+                return make(head_token, *body, _token(closing, text, at, end))
+            return self._test(head_token, head.end())
+        finally:
+            self.depth -= 1
+
+    def _test(self, head_token: Token, pos: int) -> Any:
+        """A TEST's node from its head on: CASE clauses, a DEFAULT, the ENDTEST."""
+        text, builder = self.text, self.builder
+        clauses: list = []
+        at = _GAP.match(text, pos).end()
+        keyword = _CLOSING.match(text, at)
+        if keyword is None:
+            raise _Unread(at)
+        word, end = keyword.group().upper(), keyword.end()
+        while word == "CASE":
+            clause = self.heads["case"](text, at)
+            if clause is None:
+                raise _Unread(at)
+            body, word, next_at, end = self._body(clause.end(), "CASE", "DEFAULT", "ENDTEST")
+            clauses.append(builder.fast_case_clause(
+                _token("FAST_CASE", text, at, clause.end()), *body))
+            at = next_at
+        if word == "DEFAULT":
+            default_token = _token("DEFAULT", text, at, end)
+            colon = _DEFAULT_COLON.match(text, default_token.end_pos)
+            if colon is None:
+                raise _Unread(at)
+            body, word, at, end = self._body(colon.end(), "ENDTEST")
+            clauses.append(builder.default_clause(default_token, *body))
+        if word != "ENDTEST":
+            raise _Unread(at)
+        return builder.fast_test_stmt(head_token, *clauses, _token("ENDTEST", text, at, end))
+
+    # ------------------------------------------------------------ routines
+    def routine(self, head: re.Match[str], kind: str) -> Any:
+        """The node of the routine whose head `head` matched (`kind` 'proc' or 'func'),
+        or _Unread."""
+        text = self.text
+        closing = "ENDPROC" if kind == "proc" else "ENDFUNC"
+        items: list = []
+        pos = head.end()
+        handlers = False
+        while True:
+            at = _GAP.match(text, pos).end()
+            decls = None if handlers else self.decls(text, at)
+            if decls is not None:
+                items += self.split_decls(decls.group(), at)
+                pos = decls.end()
+                continue
+            body, pos, word, at, end = self.statements(pos)
+            items += body
+            if word is None and not handlers and body and self.decls(text, at) is not None:
+                continue
+            if word == closing:
+                break
+            if word not in ("ERROR", "UNDO", "BACKWARD") or (
+                    word == "ERROR" and _NUMBERS.match(text, end)):
+                raise _Unread(at)
+            handler_token = _token(word, text, at, end)
+            body, word, at, end = self._handler_body(end, closing)
+            handler = {"ERROR": self.builder.error_handler, "UNDO": self.builder.undo_handler,
+                       "BACKWARD": self.builder.backward_handler}[handler_token.type]
+            items.append(handler(handler_token, *body))
+            handlers = True
+            if word == closing:
+                break
+            pos = at  # the next handler's keyword
+        return self.builder._fast_routine(
+            kind.upper(), _token(f"FAST_{kind.upper()}", text, head.start(), head.end()),
+            (*items, _token(closing, text, at, end)))
+
+    def _handler_body(self, pos: int, closing: str) -> tuple[list, str, int, int]:
+        return self._body(pos, "ERROR", "UNDO", "BACKWARD", closing)
+
+    def module_items(self, pos: int) -> tuple[list, int]:
+        """Routines and declarations from `pos` on, as far as they read (see _Unread)."""
+        text = self.text
+        out: list = []
+        while True:
+            known = self.done.get(pos)
+            if known is not None:
+                pos = known[0]
+                out += known[1]
+                continue
+            if pos < self.resume:
+                return out, pos
+            at = _GAP.match(text, pos).end()
+            decls = self.decls(text, at)
+            if decls is not None:
+                nodes = self.split_decls(decls.group(), at)
+            else:
+                kind = "proc" if self.heads["proc"](text, at) else \
+                    "func" if self.heads["func"](text, at) else None
+                if kind is None:
+                    return out, pos
+                nodes = [self.routine(self.heads[kind](text, at), kind)]
+            end = decls.end() if decls is not None else nodes[0].end
+            self.done[pos] = (end, nodes)
+            out += nodes
+            pos = end
+
+
+def _opens(text: str, at: int, statements: bool) -> bool:
+    """Whether the reader may find a compound statement (or a routine) at `at`."""
+    return text[at:at + 1] in (_STATEMENT_OPENERS if statements else _ITEM_OPENERS) and \
+        at < len(text)
+
+
+class BlockLexer:
+    """The `lex` of a contextual lexer, with the reader run ahead where it may."""
+
+    def __init__(self, lexer: Any, builder: Any, split_calls: Callable[[str, int], list],
+                 split_decls: Callable[[str, int], list]) -> None:
+        self.lexer = lexer
+        self._patterns: dict[str, re.Pattern[str]] | None = None
+        # the builder's callbacks, bound once (each lookup of a Lark v_args method makes
+        # a wrapper)
+        self.builder = SimpleNamespace(**{
+            name: getattr(method, "base_func", method)
+            for name in _CALLBACKS for method in (getattr(builder, name),)})
+        self.split_calls = split_calls
+        self.split_decls = split_decls
+        accepts = {state: {t.name for t in basic.terminals}
+                   for state, basic in lexer.lexers.items()}
+        self.block_states = frozenset(s for s, names in accepts.items() if BLOCK in names)
+        self.routine_states = frozenset(s for s, names in accepts.items() if ROUTINES in names)
+
+    def patterns(self) -> dict[str, re.Pattern[str]]:
+        """The fast terminals the reader matches with, compiled when first read with (the
+        large ones are those the lexer's scanners share)."""
+        if self._patterns is None:
+            root = self.lexer.root_lexer
+            self._patterns = {name: compiled_alone(root, name) for name in PATTERNS}
+        return self._patterns
+
+    def lex(self, lexer_state: Any, parser_state: Any) -> Iterator[Token]:
+        """Lark's ContextualLexer.lex, giving FAST_BLOCK / FAST_ROUTINES tokens where the
+        reader reads ahead."""
+        if not READ_AHEAD:
+            yield from type(self.lexer).lex(self.lexer, lexer_state, parser_state)
+            return
+        lexers, blocks, routines = self.lexer.lexers, self.block_states, self.routine_states
+        raw = lexer_state.text
+        text = getattr(raw, "text", raw)
+        reader: Reader | None = None  # made where first needed
+        line_ctr = lexer_state.line_ctr
+        gap = _GAP.match
+        try:
+            while True:
+                state = parser_state.position
+                if state in blocks or state in routines:
+                    pos = line_ctr.char_pos
+                    statements = state in blocks
+                    token = None
+                    if (reader is not None and pos in reader.done) or (
+                            (reader is None or pos >= reader.resume)
+                            and _opens(text, gap(text, pos).end(), statements)):
+                        if reader is None:
+                            reader = Reader(text, self.patterns(), self.builder,
+                                            self.split_calls, self.split_decls)
+                        token = self._read(reader, statements, pos)
+                    if token is not None:
+                        line_ctr.feed(text[pos:token.start_pos])  # the gap, as Lark skips it
+                        token.line, token.column = line_ctr.line, line_ctr.column
+                        line_ctr.feed(token)
+                        token.end_line, token.end_column = line_ctr.line, line_ctr.column
+                        lexer_state.last_token = token
+                        yield token
+                        continue
+                yield lexers[state].next_token(lexer_state, parser_state)
+        except EOFError:
+            pass
+        except UnexpectedCharacters as e:  # as Lark's ContextualLexer.lex
+            try:
+                last_token = lexer_state.last_token
+                token = self.lexer.root_lexer.next_token(lexer_state, parser_state)
+                raise UnexpectedToken(token, e.allowed, state=parser_state,
+                                      token_history=[last_token],
+                                      terminals_by_name=self.lexer.root_lexer.terminals_by_name)
+            except UnexpectedCharacters:
+                raise e from None
+
+    @staticmethod
+    def _read(reader: Reader, statements: bool, pos: int) -> _ReadToken | None:
+        """The token read at `pos`, or None if nothing was."""
+        text = reader.text
+        try:
+            if statements:
+                nodes, end, _, _, _ = reader.statements(pos)
+            else:
+                nodes, end = reader.module_items(pos)
+        except _Unread as unread:
+            # what was read before the construct that failed is given piece by piece
+            reader.resume = max(reader.resume, unread.at)
+            known = reader.done.get(pos)
+            if known is None:
+                return None
+            end, nodes = known
+        if not nodes:
+            return None
+        start = nodes[0].start  # (what stands before it is a gap)
+        token = _ReadToken(BLOCK if statements else ROUTINES, text[start:end],
+                           start_pos=start, end_pos=end)
+        token.nodes = nodes
+        done = reader.done
+        reader.done = {k: v for k, v in done.items() if k >= end} if end < reader.resume else {}
+        return token

@@ -1,0 +1,234 @@
+"""Compound statements and routines read ahead of the lexer (rapidfix.rapid.fast_blocks):
+the tree must be the plain grammar's, node for node, or both routes refuse the text; what
+the reader cannot read is left to the parser, and nothing is read twice."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
+
+from rapidfix.exceptions import RapidSyntaxError
+from rapidfix.rapid import fast_blocks, fastpath, parse_program
+from rapidfix.rapid.fastpath import fast_parser, parse_text
+
+MOVE = "MoveL p1,v100,z1,tool0\\WObj:=wobj0;"
+
+
+def tokens(text: str) -> list[str]:
+    """The types of the tokens the fast parser's lexer gives for `text`."""
+    interactive = fast_parser().parse_interactive(fastpath.blank_comments(text))
+    return [token.type for token in interactive.iter_parse()]
+
+
+def counted_runs(monkeypatch) -> list[tuple[str, int]]:
+    """The (text, offset) of every run of calls the reader splits, from now on."""
+    seen: list[tuple[str, int]] = []
+    split = fastpath.split_calls
+
+    def counting(text: str, base: int) -> list:
+        seen.append((text, base))
+        return split(text, base)
+
+    lexer = fast_parser().parser.lexer.lex.__self__
+    monkeypatch.setattr(lexer, "split_calls", counting)
+    return seen
+
+
+NESTED = routine(
+    "IF nMode > 0 THEN",
+    "  TEST nMode",
+    "  CASE 1, 2:",
+    "    WHILE i < 1 DO",
+    "      IF i = 0 THEN",
+    f"        {MOVE}",
+    "      ELSEIF i = 2 THEN",
+    "        i:=3;",
+    "      ELSE",
+    f"        {MOVE}",
+    "      ENDIF",
+    "      i:=i + 1;",
+    "    ENDWHILE",
+    "  DEFAULT:",
+    "    FOR k FROM 1 TO 3 STEP 1 DO",
+    "      RETURN;",
+    "    ENDFOR",
+    "  ENDTEST",
+    "ENDIF",
+    "i:=0;",
+)
+
+
+def test_nested_blocks_in_routines_are_one_token_with_the_plain_tree():
+    text = NESTED.replace("ENDMODULE", "PROC two()\n  WHILE TRUE DO\n    Stop;\n  ENDWHILE\n"
+                          "ENDPROC\nENDMODULE")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+def test_blocks_in_a_routine_the_reader_leaves_are_one_token_from_the_first_block():
+    """A routine with an ERROR handler naming error numbers is read by the parser; inside
+    it, the reader takes the statements from the first compound one on."""
+    text = NESTED.replace("ENDPROC", "ERROR (41, 42)\n  RETRY;\nENDPROC")
+    assert tokens(text)[:6] == ["MODULE", "NAME", "FAST_PROC", "FAST_BLOCK", "ERROR", "OPEN_PAREN"]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("handlers", [
+    "ERROR\n  RETRY;\n", "UNDO\n  Stop;\nERROR\n  TRYNEXT;\n", "BACKWARD\n", "ERROR\n",
+])
+def test_handlers_are_read_with_their_routine(handlers):
+    text = NESTED.replace("ENDPROC", handlers + "ENDPROC")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("piece", [
+    "lbl:", '%"Vis" + "it"% p1;', "CONNECT intno WITH tr;", "EXIT;", "RAISE 5;",
+    "Foo (a.b).c;", "x := [1, [2, n]];", "<SMT>",
+])
+def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_read_twice(
+        monkeypatch, piece):
+    """Deep in a block, a statement the reader cannot read: the blocks around it are
+    the parser's, what the reader had read complete is given as it was (each run of
+    calls split once), and the reader reads on after it."""
+    text = NESTED.replace("i:=3;", piece) + "\n"
+    text = text.replace("ENDMODULE", "PROC two()\n  IF a THEN\n    Stop;\n  ENDIF\nENDPROC\n"
+                        "ENDMODULE")
+    runs = counted_runs(monkeypatch)
+    assert shape(parse_text(text)) == plain_tree(text)
+    assert len(runs) == len(set(runs))
+    assert "FAST_ROUTINES" in tokens(text)[-3:]  # the routine after it is read whole
+
+
+def _message(text: str, monkeypatch, read_ahead: bool = True, windows: bool = True) -> str:
+    from rapidfix.rapid import syntax_errors
+
+    with monkeypatch.context() as m:
+        m.setattr(fast_blocks, "READ_AHEAD", read_ahead)
+        if not windows:
+            m.setattr(fastpath, "window", lambda *_: None)
+            m.setattr(syntax_errors, "window", lambda *_: None)
+        with pytest.raises(RapidSyntaxError) as err:
+            parse_program(text, "t.mod")
+    return str(err.value)
+
+
+@pytest.mark.parametrize("damage", [
+    ("i:=3;", "i:=3"), ("ENDWHILE", "ENDFOR"), ("DEFAULT:", "DEFAULT"), ("ENDTEST", ""),
+    ("      ENDIF", "      ENDIF;"), ("ENDPROC", "ENDFUNC"), ("ENDPROC", ""),
+])
+def test_errors_in_and_after_read_blocks_are_explained_as_without_the_reader(
+        monkeypatch, damage):
+    """A syntax error in the last of many read routines, or after them: the same message
+    (file, line, column, what was expected) with the reader, without it, and from the
+    whole text (the error windows see the reader's tokens on the parser's stack)."""
+    one = NESTED[NESTED.index("PROC"):NESTED.index("ENDMODULE")]
+    many = "".join(one.replace("PROC main", f"PROC r{k}") for k in range(120))
+    text = "MODULE M\n" + many + one.replace(*damage) + "ENDMODULE\n"
+    assert len(many) > 20_000  # error_window's _WORTH: windows are made
+    message = _message(text, monkeypatch)
+    assert message.startswith("t.mod:")
+    assert message == _message(text, monkeypatch, read_ahead=False)
+    assert message == _message(text, monkeypatch, windows=False)
+
+
+def test_blocks_nested_deeper_than_the_limit_parse_to_the_plain_tree():
+    """The outer blocks are the parser's, the inner ones read as one."""
+    depth = fast_blocks.DEPTH_LIMIT + 10
+    text = routine(*(["IF a THEN"] * depth), MOVE, *(["ENDIF"] * depth))
+    assert shape(parse_text(text)) == plain_tree(text)
+    assert tokens(text).count("FAST_BLOCK") == 1
+
+
+# ------------------------------------------------------------ random programs
+SIMPLE = [
+    MOVE, "x := x + 1;", "Stop;", "IF a Foo;", "IF a THEN b; ENDIF", "RETURN;", "RETURN x;",
+    "GOTO lbl;", "lbl:", 'TPWrite "a;b ENDIF";', "MoveL Offs(p1,0,0,n*2),v100,z1,tool0;",
+    "! ENDIF in a comment\n", "EXIT;", "Foo \\A:=1, b;", "RAISE;", "RETRY;",
+]
+# pieces that are wrong wherever the generator puts them (or nearly)
+WRONG = ["endif", "ENDIF;", "CASE 1:", "ELSE", "RAISE"]
+CONDITIONS = ["a", "n > 2 AND NOT b", "f(x) = 1", "s = \"THEN\"", "a\n  OR b"]
+
+
+@st.composite
+def statements(draw: st.DrawFn, depth: int) -> list[str]:
+    out: list[str] = []
+    for _ in range(draw(st.integers(0, 3))):
+        if depth > 0 and draw(st.booleans()):
+            out += draw(compound(depth - 1))
+        else:
+            out.append(draw(st.sampled_from(SIMPLE * 10 + WRONG)))
+    return out
+
+
+@st.composite
+def compound(draw: st.DrawFn, depth: int) -> list[str]:
+    cond = st.sampled_from(CONDITIONS)
+    body = statements(depth)
+    kind = draw(st.sampled_from(["if", "while", "for", "test"]))
+    if kind == "if":
+        out = [f"IF {draw(cond)} THEN", *draw(body)]
+        for _ in range(draw(st.integers(0, 2))):
+            out += [f"ELSEIF {draw(cond)} THEN", *draw(body)]
+        if draw(st.booleans()):
+            out += ["ELSE", *draw(body)]
+        out.append("ENDIF")
+    elif kind == "while":
+        out = [f"WHILE {draw(cond)} DO", *draw(body), "ENDWHILE"]
+    elif kind == "for":
+        step = draw(st.sampled_from(["", " STEP 2", " STEP -n"]))
+        out = [f"FOR i FROM 1 TO n{step} DO", *draw(body), "ENDFOR"]
+    else:
+        out = ["TEST n"]
+        for _ in range(draw(st.integers(0, 2))):
+            out += [f"CASE {draw(st.sampled_from(['1', '1, 2', 'a + 1']))}:", *draw(body)]
+        if draw(st.booleans()):
+            out += [draw(st.sampled_from(["DEFAULT:", "DEFAULT :", "DEFAULT\n  :"])), *draw(body)]
+        out.append("ENDTEST")
+    if draw(st.sampled_from([False] * 39 + [True])):  # damaged: a closing keyword lost or swapped
+        out[-1] = draw(st.sampled_from(["", "ENDWHILE", "ENDFOR", "ENDIF", "ELSE"]))
+    return out
+
+
+@st.composite
+def routine_text(draw: st.DrawFn) -> list[str]:
+    kind = draw(st.sampled_from(["PROC p()", "LOCAL PROC q(num x, \\switch s)",
+                                 "FUNC num f(num x)", "TRAP t"]))
+    closing = {"P": "ENDPROC", "L": "ENDPROC", "F": "ENDFUNC", "T": "ENDTRAP"}[kind[0]]
+    out = [kind, *draw(st.lists(st.sampled_from(["VAR num k:=0;", "CONST num m:=1;"]),
+                                max_size=2))]
+    out += draw(statements(3))
+    if draw(st.booleans()):
+        out.append("VAR num late;")
+        out += draw(statements(1))
+    for _ in range(draw(st.integers(0, 2))):
+        out += [draw(st.sampled_from(["ERROR", "ERROR (41)", "UNDO", "BACKWARD"])),
+                *draw(statements(1))]
+    out.append(draw(st.sampled_from([closing] * 38 + ["ENDFUNC", "ENDPROC"])))
+    return out
+
+
+@st.composite
+def program_text(draw: st.DrawFn) -> str:
+    items: list[str] = []
+    for _ in range(draw(st.integers(1, 3))):
+        if draw(st.booleans()):
+            items.append("CONST num c:=1;")
+        items += draw(routine_text())
+    gap = draw(st.sampled_from(["\n", " ", "\r\n\t", "\n! note\n"]))
+    return "MODULE M" + gap + gap.join(items) + "\nENDMODULE\n"
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(program_text())
+def test_random_blocks_and_routines_parse_as_with_the_plain_grammar(text):
+    assert_parses_as_plain(text)
+
