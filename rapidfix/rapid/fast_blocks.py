@@ -125,14 +125,18 @@ class Reader:
         self.depth = 0
 
     # ------------------------------------------------------------ statements
-    def statements(self, pos: int) -> tuple[list, int, str | None, int, int]:
+    def statements(self, pos: int, top: bool = False) -> tuple[list, int, str | None, int, int]:
         """The statements from `pos` on: them, where the last ends, and the closing
         keyword that ended them (upper case, its start and end; None and where reading
-        stopped when something else did)."""
-        text, gap, calls, heads, done = self.text, _GAP.match, self.calls, self.heads, self.done
+        stopped when something else did). Inside a construct each piece read is kept
+        (`done`) until the construct is complete; at the `top`, a compound statement that
+        does not read ends the statements before it."""
+        text, gap, calls, heads = self.text, _GAP.match, self.calls, self.heads
+        done = {} if top else self.done
+        known_pieces = self.done
         out: list = []
         while True:
-            known = done.get(pos)
+            known = known_pieces.get(pos)
             if known is not None:
                 pos = known[0]
                 out += known[1]
@@ -150,8 +154,17 @@ class Reader:
             kind = _OPENED_BY.get(text[at:at + 1])
             head = heads[kind](text, at) if kind is not None else None
             if head is not None:
-                node = self.compound(kind, head) if kind != "return" else \
-                    self.builder.fast_return_stmt(_token("FAST_RETURN", text, at, head.end()))
+                if kind == "return":
+                    node = self.builder.fast_return_stmt(
+                        _token("FAST_RETURN", text, at, head.end()))
+                elif top:
+                    try:
+                        node = self.compound(kind, head)
+                    except _Unread as unread:
+                        self.resume = max(self.resume, unread.at)
+                        return out, pos, None, at, at
+                else:
+                    node = self.compound(kind, head)
                 done[pos] = (node.end, [node])
                 out.append(node)
                 pos = node.end
@@ -179,45 +192,60 @@ class Reader:
 
     def compound(self, kind: str, head: re.Match[str]) -> Any:
         """The node of the compound statement whose head `head` matched, or _Unread."""
-        text, builder = self.text, self.builder
-        start = head.start()
         if self.depth >= DEPTH_LIMIT:
-            raise _Unread(start)
+            raise _Unread(head.start())
+        mark = len(self.done)
         self.depth += 1
         try:
-            head_token = _token(f"FAST_{kind.upper()}", text, start, head.end())
             if kind == "if":
-                rest: list = []
-                body, word, at, end = self._body(head.end(), "ELSEIF", "ELSE", "ENDIF")
-                rest += body
-                while word == "ELSEIF":
-                    clause = self.heads["elseif"](text, at)
-                    if clause is None:
-                        raise _Unread(at)
-                    body, word, next_at, end = self._body(clause.end(), "ELSEIF", "ELSE",
-                                                          "ENDIF")
-                    rest.append(builder.fast_elseif_clause(
-                        _token("FAST_ELSEIF", text, at, clause.end()), *body))
-                    at = next_at
-                if word == "ELSE":
-                    else_token = _token("ELSE", text, at, end)
-                    body, word, at, end = self._body(end, "ENDIF")
-                    rest.append(builder.else_clause(else_token, *body))
-                return builder.fast_if_stmt(head_token, *rest, _token("ENDIF", text, at, end))
-            if kind in ("while", "for"):
+                node = self._if(head)
+            elif kind == "test":
+                node = self._test(head)
+            else:
                 closing = "ENDWHILE" if kind == "while" else "ENDFOR"
                 body, _, at, end = self._body(head.end(), closing)
-                make = builder.fast_while_stmt if kind == "while" else builder.fast_for_stmt
-                return make(head_token, *body, _token(closing, text, at, end))
-            return self._test(head_token, head.end())
+                make = self.builder.fast_while_stmt if kind == "while" else \
+                    self.builder.fast_for_stmt
+                node = make(_token(f"FAST_{kind.upper()}", self.text, head.start(), head.end()),
+                            *body, _token(closing, self.text, at, end))
         finally:
             self.depth -= 1
+        self._forget_inside(mark)
+        return node
 
-    def _test(self, head_token: Token, pos: int) -> Any:
+    def _forget_inside(self, mark: int) -> None:
+        """Forget the pieces kept since `done` held `mark` of them: the construct that
+        holds them is complete (and kept itself, if it is inside another)."""
+        done = self.done
+        while len(done) > mark:
+            done.popitem()
+
+    def _if(self, head: re.Match[str]) -> Any:
+        """An IF's node from its head on: its branches, an ELSE, the ENDIF."""
+        text, builder = self.text, self.builder
+        rest: list = []
+        body, word, at, end = self._body(head.end(), "ELSEIF", "ELSE", "ENDIF")
+        rest += body
+        while word == "ELSEIF":
+            clause = self.heads["elseif"](text, at)
+            if clause is None:
+                raise _Unread(at)
+            body, word, next_at, end = self._body(clause.end(), "ELSEIF", "ELSE", "ENDIF")
+            rest.append(builder.fast_elseif_clause(
+                _token("FAST_ELSEIF", text, at, clause.end()), *body))
+            at = next_at
+        if word == "ELSE":
+            else_token = _token("ELSE", text, at, end)
+            body, word, at, end = self._body(end, "ENDIF")
+            rest.append(builder.else_clause(else_token, *body))
+        return builder.fast_if_stmt(_token("FAST_IF", text, head.start(), head.end()), *rest,
+                                    _token("ENDIF", text, at, end))
+
+    def _test(self, head: re.Match[str]) -> Any:
         """A TEST's node from its head on: CASE clauses, a DEFAULT, the ENDTEST."""
         text, builder = self.text, self.builder
         clauses: list = []
-        at = _GAP.match(text, pos).end()
+        at = _GAP.match(text, head.end()).end()
         keyword = _CLOSING.match(text, at)
         if keyword is None:
             raise _Unread(at)
@@ -239,7 +267,8 @@ class Reader:
             clauses.append(builder.default_clause(default_token, *body))
         if word != "ENDTEST":
             raise _Unread(at)
-        return builder.fast_test_stmt(head_token, *clauses, _token("ENDTEST", text, at, end))
+        return builder.fast_test_stmt(_token("FAST_TEST", text, head.start(), head.end()),
+                                      *clauses, _token("ENDTEST", text, at, end))
 
     # ------------------------------------------------------------ routines
     def routine(self, head: re.Match[str], kind: str) -> Any:
@@ -250,6 +279,7 @@ class Reader:
         items: list = []
         pos = head.end()
         handlers = False
+        mark = len(self.done)
         while True:
             at = _GAP.match(text, pos).end()
             decls = None if handlers else self.decls(text, at)
@@ -275,6 +305,7 @@ class Reader:
             if word == closing:
                 break
             pos = at  # the next handler's keyword
+        self._forget_inside(mark)
         return self.builder._fast_routine(
             kind.upper(), _token(f"FAST_{kind.upper()}", text, head.start(), head.end()),
             (*items, _token(closing, text, at, end)))
@@ -283,31 +314,30 @@ class Reader:
         return self._body(pos, "ERROR", "UNDO", "BACKWARD", closing)
 
     def module_items(self, pos: int) -> tuple[list, int]:
-        """Routines and declarations from `pos` on, as far as they read (see _Unread)."""
-        text = self.text
+        """Routines and declarations from `pos` on, as far as they read: a routine that
+        does not read ends them."""
+        text, heads = self.text, self.heads
         out: list = []
-        while True:
-            known = self.done.get(pos)
-            if known is not None:
-                pos = known[0]
-                out += known[1]
-                continue
-            if pos < self.resume:
-                return out, pos
+        while pos >= self.resume:
             at = _GAP.match(text, pos).end()
             decls = self.decls(text, at)
             if decls is not None:
-                nodes = self.split_decls(decls.group(), at)
-            else:
-                kind = "proc" if self.heads["proc"](text, at) else \
-                    "func" if self.heads["func"](text, at) else None
-                if kind is None:
-                    return out, pos
-                nodes = [self.routine(self.heads[kind](text, at), kind)]
-            end = decls.end() if decls is not None else nodes[0].end
-            self.done[pos] = (end, nodes)
-            out += nodes
-            pos = end
+                out += self.split_decls(decls.group(), at)
+                pos = decls.end()
+                continue
+            kind, head = "proc", heads["proc"](text, at)
+            if head is None:
+                kind, head = "func", heads["func"](text, at)
+                if head is None:
+                    break
+            try:
+                node = self.routine(head, kind)
+            except _Unread as unread:
+                self.resume = max(self.resume, unread.at)
+                break
+            out.append(node)
+            pos = node.end
+        return out, pos
 
 
 def _opens(text: str, at: int, statements: bool) -> bool:
@@ -394,24 +424,16 @@ class BlockLexer:
     def _read(reader: Reader, statements: bool, pos: int) -> _ReadToken | None:
         """The token read at `pos`, or None if nothing was."""
         text = reader.text
-        try:
-            if statements:
-                nodes, end, _, _, _ = reader.statements(pos)
-            else:
-                nodes, end = reader.module_items(pos)
-        except _Unread as unread:
-            # what was read before the construct that failed is given piece by piece
-            reader.resume = max(reader.resume, unread.at)
-            known = reader.done.get(pos)
-            if known is None:
-                return None
-            end, nodes = known
+        if statements:
+            nodes, end, _, _, _ = reader.statements(pos, top=True)
+        else:
+            nodes, end = reader.module_items(pos)
         if not nodes:
             return None
         start = nodes[0].start  # (what stands before it is a gap)
         token = _ReadToken(BLOCK if statements else ROUTINES, text[start:end],
                            start_pos=start, end_pos=end)
         token.nodes = nodes
-        done = reader.done
-        reader.done = {k: v for k, v in done.items() if k >= end} if end < reader.resume else {}
+        if reader.done:  # what a failed read kept: the parser is past these
+            reader.done = {k: v for k, v in reader.done.items() if k >= end}
         return token

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
-from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
+from test_fastpath import assert_parses_as_plain, plain_tree, routine, shape
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import fast_blocks, fastpath, parse_program
