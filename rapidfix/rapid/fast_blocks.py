@@ -66,6 +66,8 @@ _GAP = re.compile(r"[ \t\f\v\r\n\x1a]*(?:![^\n]*\n[ \t\f\v\r\n\x1a]*)*")
 _CLOSING = re.compile(
     rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ERROR|UNDO|BACKWARD"
     rf"|CASE|DEFAULT){_WORD_END}")
+_ENDIF_ON_LINE = re.compile(r"[^\n]*(?i:ENDIF)")
+_CLOSING_FIRST = frozenset("EeUuBbCcDd")
 _DEFAULT_COLON = re.compile(r"[ \t\f\v\r\n\x1a]*:")
 # The statements a fast head opens (or is: RETURN), by their first letter.
 _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
@@ -95,8 +97,21 @@ class _ReadToken(Token):
     __slots__ = ("nodes",)
 
 
-def _token(kind: str, text: str, start: int, end: int) -> Token:
-    return Token(kind, text[start:end], start_pos=start, end_pos=end)
+class _Word:
+    """A keyword or head the reader hands the builder's callbacks: what they read of the
+    token the lexer would have made (its type, offsets and text), at a fraction of a
+    Lark Token's cost."""
+
+    __slots__ = ("end_pos", "start_pos", "text", "type")
+
+    def __init__(self, kind: str, text: str, start: int, end: int) -> None:
+        self.type, self.text, self.start_pos, self.end_pos = kind, text, start, end
+
+    def __str__(self) -> str:
+        return self.text[self.start_pos:self.end_pos]
+
+
+_token = _Word
 
 
 class Reader:
@@ -144,15 +159,23 @@ class Reader:
             if pos < self.resume:  # before where a read failed: what it read only
                 return out, pos, None, pos, pos
             at = gap(text, pos).end()
-            m = calls(text, at)
-            if m is not None:
-                nodes = self.split_calls(m.group(), at)
-                done[pos] = (m.end(), nodes)
-                out += nodes
-                pos = m.end()
-                continue
-            kind = _OPENED_BY.get(text[at:at + 1])
+            first = text[at:at + 1]
+            if first in _CLOSING_FIRST:
+                keyword = _CLOSING.match(text, at)
+                if keyword is not None:
+                    return out, pos, keyword.group().upper(), at, keyword.end()
+            # A run of calls starts with a name, IF or GOTO, never with another keyword;
+            # with IF, only as a compact IF (no THEN) or an IF block on one line.
+            kind = _OPENED_BY.get(first)
             head = heads[kind](text, at) if kind is not None else None
+            if head is None or (kind == "if" and _ENDIF_ON_LINE.match(text, head.end())):
+                m = calls(text, at)
+                if m is not None:
+                    nodes = self.split_calls(m.group(), at)
+                    done[pos] = (m.end(), nodes)
+                    out += nodes
+                    pos = m.end()
+                    continue
             if head is not None:
                 if kind == "return":
                     node = self.builder.fast_return_stmt(
@@ -169,9 +192,6 @@ class Reader:
                 out.append(node)
                 pos = node.end
                 continue
-            keyword = _CLOSING.match(text, at)
-            if keyword is not None:
-                return out, pos, keyword.group().upper(), at, keyword.end()
             plain = _KEYWORD_STATEMENT.match(text, at)
             if plain is None:
                 return out, pos, None, at, at

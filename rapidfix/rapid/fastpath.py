@@ -328,8 +328,11 @@ def grammar_extension(grammar: str) -> str:
     # the plain one lengthens what every process compiles)
     if_block = (f"{p['block_head']}(?:[ \t]*{p['general_call']}){{0,{RUN_LIMIT}}}"
                 f"[ \t]*(?i:ENDIF){_WORD_END}")
-    calls = f"(?={NAME_START})(?:{GAP}(?:{p['call']}|{if_block})){{1,{RUN_LIMIT}}}"
-    decls = f"(?={NAME_START})(?:{GAP}{p['decl']}){{1,{RUN_LIMIT}}}"
+    # (each statement starts with a letter: said after the gap too, so that where the run
+    # ends the engine does not try every statement's pattern at every shorter gap)
+    calls = (f"(?={NAME_START})(?:{GAP}(?={NAME_START})(?:{p['call']}|{if_block}))"
+             f"{{1,{RUN_LIMIT}}}")
+    decls = f"(?={NAME_START})(?:{GAP}(?={NAME_START}){p['decl']}){{1,{RUN_LIMIT}}}"
     heads = {kind: p[kind] for kind in _HEAD_RULES}
     if "/" in calls + decls + "".join(heads.values()):  # pragma: no cover
         raise ValueError("a terminal pattern holds '/'")  # a Lark regex literal ends at '/'
