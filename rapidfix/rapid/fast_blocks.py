@@ -18,13 +18,13 @@ read (a label, a late call, an ERROR handler with numbers, a statement no fast t
 takes, a syntax error) ends the token before the outermost construct that holds it,
 and Lark reads on from there as before.
 
-A read that failed leaves what it did read complete (each run and each compound
-statement) by position, and the lexer hands those out when the parser reaches them,
-so a construct is read once whether or not its enclosing one could be; past the
-failure, reading ahead starts again. So nothing is read twice and the reader's work
-stays linear in the text. The grammar stays the definition of the language: the reader
-takes a construct only where every piece is one the lexer would give that parser state,
-and the equivalence tests parse everything both ways.
+Inside a construct that fails, what was read complete (each run of calls and each
+compound statement) is kept by position, and the lexer hands it out when the parser
+reaches it; reading ahead starts again past the failure. So nothing is read twice,
+however deep the failure, and the reader's work stays linear in the text. The grammar
+stays the definition of the language: the reader takes a construct only where every
+piece is one the lexer would give that parser state, and the equivalence tests parse
+everything both ways (tests/rapid/test_fast_blocks.py).
 """
 
 from __future__ import annotations
@@ -62,12 +62,13 @@ DEPTH_LIMIT = 48
 _WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 # Whitespace and comments (a comment with its newline), as between fast statements.
 _GAP = re.compile(r"[ \t\f\v\r\n\x1a]*(?:![^\n]*\n[ \t\f\v\r\n\x1a]*)*")
-# The keywords that close a statement list, by first letter.
+# The keywords that close a statement list (a clause, a routine's body or handler).
 _CLOSING = re.compile(
     rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ERROR|UNDO|BACKWARD"
     rf"|CASE|DEFAULT){_WORD_END}")
-_ENDIF_ON_LINE = re.compile(r"[^\n]*(?i:ENDIF)")
 _CLOSING_FIRST = frozenset("EeUuBbCcDd")
+# An ENDIF later on the line: an IF head may then begin an IF block that a run takes.
+_ENDIF_ON_LINE = re.compile(r"[^\n]*(?i:ENDIF)")
 _DEFAULT_COLON = re.compile(r"[ \t\f\v\r\n\x1a]*:")
 # The statements a fast head opens (or is: RETURN), by their first letter.
 _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
@@ -360,6 +361,17 @@ class Reader:
         return out, pos
 
 
+def _advance(line_ctr: Any, text: str, end: int) -> None:
+    """Lark's LineCounter.feed of text[line_ctr.char_pos:end], without the copy."""
+    start = line_ctr.char_pos
+    newlines = text.count("\n", start, end)
+    if newlines:
+        line_ctr.line += newlines
+        line_ctr.line_start_pos = text.rindex("\n", start, end) + 1
+    line_ctr.char_pos = end
+    line_ctr.column = end - line_ctr.line_start_pos + 1
+
+
 def _opens(text: str, at: int, statements: bool) -> bool:
     """Whether the reader may find a compound statement (or a routine) at `at`."""
     return text[at:at + 1] in (_STATEMENT_OPENERS if statements else _ITEM_OPENERS) and \
@@ -420,9 +432,9 @@ class BlockLexer:
                                             self.split_calls, self.split_decls)
                         token = self._read(reader, statements, pos)
                     if token is not None:
-                        line_ctr.feed(text[pos:token.start_pos])  # the gap, as Lark skips it
+                        _advance(line_ctr, text, token.start_pos)  # the gap, as Lark skips it
                         token.line, token.column = line_ctr.line, line_ctr.column
-                        line_ctr.feed(token)
+                        _advance(line_ctr, text, token.end_pos)
                         token.end_line, token.end_column = line_ctr.line, line_ctr.column
                         lexer_state.last_token = token
                         yield token
@@ -450,9 +462,15 @@ class BlockLexer:
             nodes, end = reader.module_items(pos)
         if not nodes:
             return None
-        start = nodes[0].start  # (what stands before it is a gap)
-        token = _ReadToken(BLOCK if statements else ROUTINES, text[start:end],
-                           start_pos=start, end_pos=end)
+        start = nodes[0].start
+        if _GAP.match(text, pos).end() != start:  # pragma: no cover - the lexer's own then
+            return None
+        # (its value: the first line of the text it stands for, which may be a whole
+        # module; its offsets say where all of it is)
+        line_end = text.find("\n", start, end)
+        token = _ReadToken(BLOCK if statements else ROUTINES,
+                           text[start:end if line_end < 0 else line_end], start_pos=start,
+                           end_pos=end)
         token.nodes = nodes
         if reader.done:  # what a failed read kept: the parser is past these
             reader.done = {k: v for k, v in reader.done.items() if k >= end}

@@ -22,9 +22,17 @@ MOVE = "MoveL p1,v100,z1,tool0\\WObj:=wobj0;"
 
 
 def tokens(text: str) -> list[str]:
-    """The types of the tokens the fast parser's lexer gives for `text`."""
+    """The types of the tokens the fast parser's lexer gives for `text`; each token's line
+    and column (where it starts and ends) are checked against its offsets."""
     interactive = fast_parser().parse_interactive(fastpath.blank_comments(text))
-    return [token.type for token in interactive.iter_parse()]
+    types = []
+    for token in interactive.iter_parse():
+        for line, column, at in ((token.line, token.column, token.start_pos),
+                                 (token.end_line, token.end_column, token.end_pos)):
+            assert (line, column) == (text.count("\n", 0, at) + 1,
+                                      at - text.rfind("\n", 0, at)), token
+        types.append(token.type)
+    return types
 
 
 def counted_runs(monkeypatch) -> list[tuple[str, int]]:
