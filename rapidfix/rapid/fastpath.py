@@ -47,6 +47,10 @@ head, `[LOCAL] PROC name(parameters)` or `[LOCAL] FUNC type name(parameters)`, i
 terminal too (a program of many small routines spent a Lark step on each of its
 words), its parameters without alternatives (`\\a | b`) or placeholders.
 
+Whole compound statements and whole routines go further: rapidfix.rapid.fast_blocks
+reads them ahead of the lexer with these terminals and hands the parser one token
+(FAST_BLOCK, FAST_ROUTINES) holding their nodes, made by this module's callbacks.
+
 Lark stays the parser: a run is an inlined rule (`_fast_calls`, `_fast_decls`)
 added where the grammar allows a statement or a declaration, whose nodes Lark
 splices into the enclosing list as it does for every rule named with `_`; the
@@ -1690,7 +1694,7 @@ def fast_parser() -> Lark:
         transformer=builder,
         cache=True,
     ))
-    lexer = parser.parser.lexer
+    lexer = parser.parser.lexer  # its lex, with fast_blocks' reader ahead of it
     lexer.lex = fast_blocks.BlockLexer(lexer, builder, split_calls, split_decls).lex
     return parser
 

@@ -103,7 +103,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
               "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
-              "record_tables", "multimove", "one_line")
+              "record_tables", "multimove", "one_line", "labels")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -234,6 +234,22 @@ def _parts(moves: list[str], per: int = 500) -> list[str]:
     for first in range(0, len(moves), per):
         out += [f"  PROC Part{first // per}()", *moves[first:first + per], "  ENDPROC"]
     return out
+
+
+def _labels(n: int) -> list[str]:
+    """Routines of blocks with a label inside a WHILE (a retry point, and a compact IF's
+    GOTO to it): the statements a compound-statement reader does not take stand deep in
+    every routine."""
+    out = [*_head("Labels"), "  VAR num i:=0;", "  VAR num nTry:=0;", *_decls(n)]
+    for first in range(0, n, 6):
+        moves = [f"MoveL p{j},v100,z1,tMill\\WObj:=wPlate;"
+                 for j in range(first, min(n, first + 6))]
+        out += [f"  PROC Part{first // 6}()", "    i:=0;", "    WHILE i < 2 DO",
+                "      IF i = 0 THEN", *(f"        {m}" for m in moves[:3]), "      ENDIF",
+                "      lRetry:", *(f"      {m}" for m in moves[3:]), "      i:=i + 1;",
+                "      nTry:=nTry + 1;", "      IF nTry < 0 GOTO lRetry;", "    ENDWHILE",
+                "  ENDPROC"]
+    return [*out, "ENDMODULE"]
 
 
 def _assign(n: int) -> list[str]:
@@ -758,7 +774,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "one_routine": _one_routine, "inline_data": _inline_data,
              "long_names": _long_names, "deep_calls": _deep_calls,
              "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
-             "record_tables": _record_tables, "multimove": _multimove, "one_line": _one_line}
+             "record_tables": _record_tables, "multimove": _multimove, "one_line": _one_line,
+             "labels": _labels}
 #: shapes whose statements share one line: their lines are counted as those of the shape
 #: written a statement to a line
 _PACKED = {"one_line": "hand_offs"}

@@ -15,6 +15,13 @@ shapes:
     RAPIDFIX_BENCH_ODD_LINES=100000 OMP_NUM_THREADS=1 \
     pytest tests/benchmarks/test_odd_shapes_speed.py -n 0 -s -k parse_odd
 
+`test_read_ahead` times parse + model of the shapes of control flow and routines with
+rapidfix.rapid.fast_blocks' reader and without it (the fast terminals alone), in the
+same process (RAPIDFIX_BENCH_ODD_SHAPES picks others):
+
+    RAPIDFIX_BENCH_ODD_LINES=100000 OMP_NUM_THREADS=1 \
+    pytest tests/benchmarks/test_odd_shapes_speed.py -n 0 -s -k read_ahead
+
 `test_syntax_error_in_a_large_file` times `rapidfix check` of a
 large program with one syntax error against the clean program. Only correctness is
 asserted, never time.
@@ -28,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 from odd_shapes import ODD_SHAPES, odd_lines, odd_program
-from test_shapes_speed import _parse_rows, _run_cli, model_path  # noqa: F401  (a fixture)
+from test_shapes_speed import _cpu, _parse_rows, _run_cli, model_path  # noqa: F401  (a fixture)
 
 LINES = int(os.environ.get("RAPIDFIX_BENCH_ODD_LINES", "20000"))
 ONLY = [s for s in os.environ.get("RAPIDFIX_BENCH_ODD_SHAPES", "").split(",") if s] or list(
@@ -67,6 +74,39 @@ def test_parse_odd_shapes():
     """Parse + model of every odd shape against plain Lark on the same file, one core:
     the issue's 60,000 lines/s and 8x are for every shape, not the named ones only."""
     _parse_rows(ONLY, odd_program, LINES, odd_lines, _odd_suffix)
+
+
+def test_read_ahead(monkeypatch):
+    """Parse + model with the compound statements and routines read ahead of the lexer,
+    against the fast terminals alone, on the same file in the same process; `labels`
+    has in every routine a statement the reader leaves to the parser (a label), deep in
+    a WHILE: what it read there is handed out, not read again."""
+    from program_shapes import shape_program
+
+    from rapidfix.rapid import fast_blocks, parse_program
+
+    shapes = [s for s in os.environ.get("RAPIDFIX_BENCH_ODD_SHAPES", "").split(",") if s] or [
+        "deep", "many_procs", "labels", "conditions", "loops", "failing", "control"]
+    parse_program("MODULE M\nENDMODULE\n")
+    rows = []
+    for shape in shapes:
+        text = shape_program(shape, LINES) if shape == "control" else odd_program(shape, LINES)
+        data = text.encode()
+        best = {}
+        for _ in range(2):
+            for read_ahead in (False, True):
+                monkeypatch.setattr(fast_blocks, "READ_AHEAD", read_ahead)
+                program, cpu = _cpu(parse_program, data, f"x{_odd_suffix(shape)}")
+                assert program.to_bytes() == data and program.motions
+                del program
+                best[read_ahead] = min(cpu, best.get(read_ahead, cpu))
+        lines = odd_lines(shape, data)
+        rows.append((shape, lines, lines / best[False], lines / best[True]))
+    print(f"\nparse + model, lines/s of CPU time, {LINES:,} lines per shape")
+    print(f"{'shape':12s} {'lines':>8s} {'fast terminals':>15s} {'read ahead':>11s} "
+          f"{'ratio':>6s}")
+    for shape, lines, alone, ahead in rows:
+        print(f"{shape:12s} {lines:8,d} {alone:15,.0f} {ahead:11,.0f} {ahead / alone:5.2f}x")
 
 
 def test_syntax_error_in_a_large_file(tmp_path):
