@@ -1653,8 +1653,8 @@ def cached_extension(grammar: str) -> str:
 
     Working it out needs the plain parser's tables and an interactive parse (about
     0.06 s); a command that checks one small file would spend a fifth of its time on
-    it. The key covers the grammar, this module's and fast_expressions' sources and
-    Lark's version.
+    it. The key covers the grammar, this module's, fast_expressions' and fast_blocks'
+    sources and Lark's version.
     """
     import os
     import tempfile
@@ -1664,7 +1664,8 @@ def cached_extension(grammar: str) -> str:
 
     from rapidfix.digest import sha256_bytes
 
-    source = Path(__file__).read_bytes() + Path(fast_expressions.__file__).read_bytes()
+    source = b"".join(Path(module.__file__).read_bytes()
+                      for module in (sys.modules[__name__], fast_expressions, fast_blocks))
     key = sha256_bytes(grammar.encode() + source + lark.__version__.encode())
     user = getattr(os, "getuid", lambda: "user")()
     path = Path(tempfile.gettempdir()) / f".rapidfix_fastpath_{user}_{key[:40]}.lark"
