@@ -51,8 +51,8 @@ PATTERNS = ("FAST_CALLS", "FAST_DECLS", *(f"FAST_{kind.upper()}" for kind in _HE
 _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_stmt",
               "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
               "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
-              "error_handler", "undo_handler", "backward_handler",
-              "_fast_routine")
+              "connect_stmt", "name_ref", "error_handler", "undo_handler", "backward_handler",
+              "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
 #: those terminals see them)
 READ_AHEAD = True
@@ -64,7 +64,7 @@ _WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 _GAP = re.compile(r"[ \t\f\v\r\n\x1a]*(?:![^\n]*\n[ \t\f\v\r\n\x1a]*)*")
 # The keywords that close a statement list (a clause, a routine's body or handler).
 _CLOSING = re.compile(
-    rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ERROR|UNDO|BACKWARD"
+    rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ENDTRAP|ERROR|UNDO|BACKWARD"
     rf"|CASE|DEFAULT){_WORD_END}")
 _CLOSING_FIRST = frozenset("EeUuBbCcDd")
 # An ENDIF later on the line: an IF head may then begin an IF block that a run takes.
@@ -77,10 +77,20 @@ _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
 # the parser may take a statement, a routine (or a declaration) where it may take a
 # module item.
 _STATEMENT_OPENERS = frozenset("IiWwFfTt")
-_ITEM_OPENERS = frozenset("PpFfLl")
+_ITEM_OPENERS = frozenset("PpFfLlTt")
 # The statements of a keyword and `;` (in error handlers mostly).
 _KEYWORD_STATEMENT = re.compile(
     rf"(?i:(RETRY|TRYNEXT|EXIT|RAISE)){_WORD_END}[ \t\f\v\r\n\x1a]*;")
+# The start of a routine's head.
+_ROUTINE_HEAD = re.compile(rf"(?i:(?:LOCAL[ \t\f\v\r\n\x1a]+)?(?:PROC|FUNC|TRAP)){_WORD_END}")
+# A trap routine's head (no fast terminal takes it): LOCAL, TRAP and the name in groups.
+_NAME = rf"[A-Za-z{LATIN1_LETTERS}][A-Za-z0-9_{LATIN1_LETTERS}]*{_WORD_END}"
+_TRAP_HEAD = re.compile(rf"(?:(?i:(LOCAL))[ \t\f\v\r\n\x1a]+)?(?i:(TRAP)){_WORD_END}"
+                        rf"[ \t\f\v\r\n\x1a]*({_NAME})")
+# `CONNECT name WITH trap;`, its names in groups.
+_CONNECT = re.compile(rf"(?i:CONNECT){_WORD_END}[ \t\f\v\r\n\x1a]*({_NAME})"
+                      rf"[ \t\f\v\r\n\x1a]*(?i:(WITH)){_WORD_END}[ \t\f\v\r\n\x1a]*"
+                      rf"({_NAME})[ \t\f\v\r\n\x1a]*;")
 # What follows ERROR when its handler names error numbers: left to the parser.
 _NUMBERS = re.compile(r"[ \t\f\v\r\n\x1a]*\(")
 
@@ -130,6 +140,7 @@ class Reader:
         self.calls = patterns["FAST_CALLS"].match
         self.decls = patterns["FAST_DECLS"].match
         self.heads = {kind: patterns[f"FAST_{kind.upper()}"].match for kind in _HEADS}
+        self.heads["trap"] = _TRAP_HEAD.match
         self.builder = builder
         self.split_calls = split_calls
         self.split_decls = split_decls
@@ -195,7 +206,13 @@ class Reader:
                 continue
             plain = _KEYWORD_STATEMENT.match(text, at)
             if plain is None:
-                return out, pos, None, at, at
+                node = self._connect(at)
+                if node is None:
+                    return out, pos, None, at, at
+                done[pos] = (node.end, [node])
+                out.append(node)
+                pos = node.end
+                continue
             word = plain.group(1).upper()
             node = getattr(self.builder, f"{word.lower()}_stmt")(
                 _token(word, text, at, plain.end(1)), _token("SEMI", text, plain.end() - 1,
@@ -203,6 +220,17 @@ class Reader:
             done[pos] = (node.end, [node])
             out.append(node)
             pos = node.end
+
+    def _connect(self, at: int) -> Any:
+        """The node of `CONNECT name WITH trap;` at `at`, or None."""
+        m = _CONNECT.match(self.text, at)
+        if m is None:
+            return None
+        text, builder = self.text, self.builder
+        target = builder.name_ref(_token("NAME", text, m.start(1), m.end(1)))
+        return builder.connect_stmt(
+            _token("CONNECT", text, at, at + 7), target, _token("WITH", text, *m.span(2)),
+            _token("NAME", text, *m.span(3)), _token("SEMI", text, m.end() - 1, m.end()))
 
     def _body(self, pos: int, *closing: str) -> tuple[list, str, int, int]:
         """Statements up to one of the `closing` keywords, or _Unread."""
@@ -293,10 +321,10 @@ class Reader:
 
     # ------------------------------------------------------------ routines
     def routine(self, head: re.Match[str], kind: str) -> Any:
-        """The node of the routine whose head `head` matched (`kind` 'proc' or 'func'),
-        or _Unread."""
+        """The node of the routine whose head `head` matched (`kind` 'proc', 'func' or
+        'trap'), or _Unread."""
         text = self.text
-        closing = "ENDPROC" if kind == "proc" else "ENDFUNC"
+        closing = f"END{kind.upper()}"
         items: list = []
         pos = head.end()
         handlers = False
@@ -327,9 +355,16 @@ class Reader:
                 break
             pos = at  # the next handler's keyword
         self._forget_inside(mark)
+        end_word = _token(closing, text, at, end)
+        if kind == "trap":  # the plain rule's words: LOCAL? TRAP NAME
+            local = head.start(1) >= 0
+            words = [_token("LOCAL", text, head.start(1), head.end(1))] if local else []
+            words += [_token("TRAP", text, head.start(2), head.end(2)),
+                      _token("NAME", text, head.start(3), head.end(3))]
+            return self.builder.trap(*words, *items, end_word)
         return self.builder._fast_routine(
             kind.upper(), _token(f"FAST_{kind.upper()}", text, head.start(), head.end()),
-            (*items, _token(closing, text, at, end)))
+            (*items, end_word))
 
     def _handler_body(self, pos: int, closing: str) -> tuple[list, str, int, int]:
         return self._body(pos, "ERROR", "UNDO", "BACKWARD", closing)
@@ -346,11 +381,12 @@ class Reader:
                 out += self.split_decls(decls.group(), at)
                 pos = decls.end()
                 continue
-            kind, head = "proc", heads["proc"](text, at)
-            if head is None:
-                kind, head = "func", heads["func"](text, at)
-                if head is None:
+            for kind in ("proc", "func", "trap"):
+                head = heads[kind](text, at)
+                if head is not None:
                     break
+            else:
+                break
             try:
                 node = self.routine(head, kind)
             except _Unread as unread:
@@ -370,12 +406,6 @@ def _advance(line_ctr: Any, text: str, end: int) -> None:
         line_ctr.line_start_pos = text.rindex("\n", start, end) + 1
     line_ctr.char_pos = end
     line_ctr.column = end - line_ctr.line_start_pos + 1
-
-
-def _opens(text: str, at: int, statements: bool) -> bool:
-    """Whether the reader may find a compound statement (or a routine) at `at`."""
-    return text[at:at + 1] in (_STATEMENT_OPENERS if statements else _ITEM_OPENERS) and \
-        at < len(text)
 
 
 class BlockLexer:
@@ -411,26 +441,26 @@ class BlockLexer:
         if not READ_AHEAD:
             yield from type(self.lexer).lex(self.lexer, lexer_state, parser_state)
             return
-        lexers, blocks, routines = self.lexer.lexers, self.block_states, self.routine_states
+        lexers, either = self.lexer.lexers, self.block_states | self.routine_states
         raw = lexer_state.text
         text = getattr(raw, "text", raw)
         reader: Reader | None = None  # made where first needed
         line_ctr = lexer_state.line_ctr
-        gap = _GAP.match
         try:
             while True:
                 state = parser_state.position
-                if state in blocks or state in routines:
+                if state in either:
                     pos = line_ctr.char_pos
-                    statements = state in blocks
                     token = None
-                    if (reader is not None and pos in reader.done) or (
-                            (reader is None or pos >= reader.resume)
-                            and _opens(text, gap(text, pos).end(), statements)):
-                        if reader is None:
-                            reader = Reader(text, self.patterns(), self.builder,
-                                            self.split_calls, self.split_decls)
-                        token = self._read(reader, statements, pos)
+                    if reader is not None and pos in reader.done:  # (statements only)
+                        token = self._read(reader, True, pos)
+                    elif reader is None or pos >= reader.resume:
+                        statements = self._opens(state, text, _GAP.match(text, pos).end())
+                        if statements is not None:
+                            if reader is None:
+                                reader = Reader(text, self.patterns(), self.builder,
+                                                self.split_calls, self.split_decls)
+                            token = self._read(reader, statements, pos)
                     if token is not None:
                         _advance(line_ctr, text, token.start_pos)  # the gap, as Lark skips it
                         token.line, token.column = line_ctr.line, line_ctr.column
@@ -451,6 +481,23 @@ class BlockLexer:
                                       terminals_by_name=self.lexer.root_lexer.terminals_by_name)
             except UnexpectedCharacters:
                 raise e from None
+
+    def _opens(self, state: int, text: str, at: int) -> bool | None:
+        """What the reader may find at `at` in parser state `state`: statements from a
+        compound one (True), module items from a routine (False), or nothing (None).
+
+        (A state after a run of declarations is both a module's and a routine body's:
+        LALR merges them, and a routine's head tells which it is.)"""
+        first = text[at:at + 1]
+        if state not in self.routine_states:
+            return True if first in _STATEMENT_OPENERS else None
+        if state not in self.block_states:
+            return False if first in _ITEM_OPENERS else None
+        # both: a routine's head is no statement, and only a routine's head tells a
+        # module from a routine's body (PERS, LOCAL and TASK start either's data)
+        if _ROUTINE_HEAD.match(text, at):
+            return False
+        return True if first in _STATEMENT_OPENERS else None
 
     @staticmethod
     def _read(reader: Reader, statements: bool, pos: int) -> _ReadToken | None:

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
-from test_fastpath import assert_parses_as_plain, plain_tree, routine, shape
+from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
 
 from rapidfix.exceptions import RapidSyntaxError
 from rapidfix.rapid import fast_blocks, fastpath, parse_program
@@ -97,6 +97,28 @@ def test_handlers_are_read_with_their_routine(handlers):
     assert shape(parse_text(text)) == plain_tree(text)
 
 
+def test_traps_and_connections_are_read_with_the_routines():
+    text = module("VAR intnum iStop;", "LOCAL TRAP Stopped", "  StopMove;", "ERROR",
+                  "  RAISE;", "ENDTRAP", "PROC main()", "  CONNECT iStop WITH Stopped;",
+                  "  ISignalDI diStop, 1, iStop;", f"  {MOVE}", "ENDPROC", "trap t2",
+                  "endtrap")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_DECLS", "FAST_ROUTINES", "ENDMODULE"]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("data", ["PERS num n:=1;", "LOCAL VAR num n;", "TASK PERS num n:=2;"])
+def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
+    """After a run of declarations the parser's state is a module's and a routine body's
+    at once (LALR merged them): the routine's further data is read as the routine's. (The
+    routine's head, with alternative parameters, is the parser's: so is its data.)"""
+    decls = [f"  VAR num a{k};" for k in range(fastpath.RUN_LIMIT + 5)]
+    text = module("PROC main(\\num a | switch b)", *decls, f"  {data}", "  IF a THEN",
+                  f"    {MOVE}", "  ENDIF", "ENDPROC")
+    kinds = tokens(text)
+    assert "FAST_ROUTINES" not in kinds and kinds.count("FAST_BLOCK") == 1
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
 @pytest.mark.parametrize("piece", [
     "lbl:", '%"Vis" + "it"% p1;', "CONNECT intno WITH tr;", "EXIT;", "RAISE 5;",
     "Foo (a.b).c;", "x := [1, [2, n]];", "<SMT>",
@@ -160,6 +182,7 @@ SIMPLE = [
     MOVE, "x := x + 1;", "Stop;", "IF a Foo;", "IF a THEN b; ENDIF", "RETURN;", "RETURN x;",
     "GOTO lbl;", "lbl:", 'TPWrite "a;b ENDIF";', "MoveL Offs(p1,0,0,n*2),v100,z1,tool0;",
     "! ENDIF in a comment\n", "EXIT;", "Foo \\A:=1, b;", "RAISE;", "RETRY;",
+    "CONNECT iStop WITH t;", "CONNECT a{1} WITH t;", "CONNECT with WITH WITH;",
 ]
 # pieces that are wrong wherever the generator puts them (or nearly)
 WRONG = ["endif", "ENDIF;", "CASE 1:", "ELSE", "RAISE"]
@@ -209,8 +232,8 @@ def compound(draw: st.DrawFn, depth: int) -> list[str]:
 @st.composite
 def routine_text(draw: st.DrawFn) -> list[str]:
     kind = draw(st.sampled_from(["PROC p()", "LOCAL PROC q(num x, \\switch s)",
-                                 "FUNC num f(num x)", "TRAP t"]))
-    closing = {"P": "ENDPROC", "L": "ENDPROC", "F": "ENDFUNC", "T": "ENDTRAP"}[kind[0]]
+                                 "FUNC num f(num x)", "TRAP t", "LOCAL TRAP\n  if"]))
+    closing = "END" + next(w for w in ("PROC", "FUNC", "TRAP") if w in kind.upper())
     out = [kind, *draw(st.lists(st.sampled_from(["VAR num k:=0;", "CONST num m:=1;"]),
                                 max_size=2))]
     out += draw(statements(3))
