@@ -51,8 +51,8 @@ PATTERNS = ("FAST_CALLS", "FAST_DECLS", *(f"FAST_{kind.upper()}" for kind in _HE
 _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_stmt",
               "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
               "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
-              "connect_stmt", "name_ref", "error_handler", "undo_handler", "backward_handler",
-              "_fast_routine", "trap")
+              "connect_stmt", "name_ref", "label", "error_handler", "undo_handler",
+              "backward_handler", "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
 #: those terminals see them)
 READ_AHEAD = True
@@ -91,6 +91,8 @@ _TRAP_HEAD = re.compile(rf"(?:(?i:(LOCAL))[ \t\f\v\r\n\x1a]+)?(?i:(TRAP)){_WORD_
 _CONNECT = re.compile(rf"(?i:CONNECT){_WORD_END}[ \t\f\v\r\n\x1a]*({_NAME})"
                       rf"[ \t\f\v\r\n\x1a]*(?i:(WITH)){_WORD_END}[ \t\f\v\r\n\x1a]*"
                       rf"({_NAME})[ \t\f\v\r\n\x1a]*;")
+# A label, `name:` (not `name:=`), its name in a group.
+_LABEL = re.compile(rf"({_NAME})[ \t\f\v\r\n\x1a]*:(?!=)")
 # What follows ERROR when its handler names error numbers: left to the parser.
 _NUMBERS = re.compile(r"[ \t\f\v\r\n\x1a]*\(")
 
@@ -130,13 +132,15 @@ class Reader:
 
     `patterns` are the compiled fast terminals by name (FAST_CALLS, FAST_DECLS and the
     heads); `split_calls` and `split_decls` turn a run's text into its nodes, `builder`
-    is the fast path's syntax builder (its callbacks make the compound nodes).
+    is the fast path's syntax builder (its callbacks make the compound nodes), `keywords`
+    the grammar's keywords (upper case).
     """
 
     def __init__(self, text: str, patterns: dict[str, re.Pattern[str]], builder: Any,
-                 split_calls: Callable[[str, int], list], split_decls: Callable[[str, int], list]
-                 ) -> None:
+                 split_calls: Callable[[str, int], list], split_decls: Callable[[str, int], list],
+                 keywords: frozenset[str]) -> None:
         self.text = text
+        self.keywords = keywords
         self.calls = patterns["FAST_CALLS"].match
         self.decls = patterns["FAST_DECLS"].match
         self.heads = {kind: patterns[f"FAST_{kind.upper()}"].match for kind in _HEADS}
@@ -206,7 +210,7 @@ class Reader:
                 continue
             plain = _KEYWORD_STATEMENT.match(text, at)
             if plain is None:
-                node = self._connect(at)
+                node = self._connect(at) or self._label(at)
                 if node is None:
                     return out, pos, None, at, at
                 done[pos] = (node.end, [node])
@@ -220,6 +224,15 @@ class Reader:
             done[pos] = (node.end, [node])
             out.append(node)
             pos = node.end
+
+    def _label(self, at: int) -> Any:
+        """The node of a label `name:` at `at` (its name no keyword), or None."""
+        m = _LABEL.match(self.text, at)
+        if m is None or m.group(1).upper() in self.keywords:
+            return None
+        text = self.text
+        return self.builder.label(_token("NAME", text, *m.span(1)),
+                                  _token("COLON", text, m.end() - 1, m.end()))
 
     def _connect(self, at: int) -> Any:
         """The node of `CONNECT name WITH trap;` at `at`, or None."""
@@ -424,6 +437,10 @@ class BlockLexer:
         self.split_decls = split_decls
         accepts = {state: {t.name for t in basic.terminals}
                    for state, basic in lexer.lexers.items()}
+        # (upper case: a label is no keyword)
+        self.keywords = frozenset(
+            t.pattern.value.upper() for t in lexer.root_lexer.terminals
+            if t.pattern.type == "str" and t.pattern.value.isalpha())
         self.block_states = frozenset(s for s, names in accepts.items() if BLOCK in names)
         self.routine_states = frozenset(s for s, names in accepts.items() if ROUTINES in names)
 
@@ -459,7 +476,8 @@ class BlockLexer:
                         if statements is not None:
                             if reader is None:
                                 reader = Reader(text, self.patterns(), self.builder,
-                                                self.split_calls, self.split_decls)
+                                                self.split_calls, self.split_decls,
+                                                self.keywords)
                             token = self._read(reader, statements, pos)
                     if token is not None:
                         _advance(line_ctr, text, token.start_pos)  # the gap, as Lark skips it

@@ -106,6 +106,12 @@ def test_traps_and_connections_are_read_with_the_routines():
     assert shape(parse_text(text)) == plain_tree(text)
 
 
+def test_labels_are_read_with_their_routine():
+    text = NESTED.replace("i:=3;", "lRetry :\n        i:=3;\n        GOTO lRetry;")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert shape(parse_text(text)) == plain_tree(text)
+
+
 @pytest.mark.parametrize("data", ["PERS num n:=1;", "LOCAL VAR num n;", "TASK PERS num n:=2;"])
 def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
     """After a run of declarations the parser's state is a module's and a routine body's
@@ -120,8 +126,8 @@ def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
 
 
 @pytest.mark.parametrize("piece", [
-    "lbl:", '%"Vis" + "it"% p1;', "CONNECT intno WITH tr;", "EXIT;", "RAISE 5;",
-    "Foo (a.b).c;", "x := [1, [2, n]];", "<SMT>",
+    '%"Vis" + "it"% p1;', "CONNECT a{1} WITH tr;", "RAISE 5;", "ENDFOR:",
+    "Foo (a.b).c;", "<SMT>",
 ])
 def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_read_twice(
         monkeypatch, piece):
@@ -134,7 +140,9 @@ def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_rea
     runs = counted_runs(monkeypatch)
     assert shape(parse_text(text)) == plain_tree(text)
     assert len(runs) == len(set(runs))
-    assert "FAST_ROUTINES" in tokens(text)[-3:]  # the routine after it is read whole
+    kinds = tokens(text)
+    assert kinds[2] == "FAST_PROC"  # the routine holding it is the parser's
+    assert "FAST_ROUTINES" in kinds[-3:]  # the routine after it is read whole
 
 
 def _message(text: str, monkeypatch, read_ahead: bool = True, windows: bool = True) -> str:
@@ -180,7 +188,8 @@ def test_blocks_nested_deeper_than_the_limit_parse_to_the_plain_tree():
 # ------------------------------------------------------------ random programs
 SIMPLE = [
     MOVE, "x := x + 1;", "Stop;", "IF a Foo;", "IF a THEN b; ENDIF", "RETURN;", "RETURN x;",
-    "GOTO lbl;", "lbl:", 'TPWrite "a;b ENDIF";', "MoveL Offs(p1,0,0,n*2),v100,z1,tool0;",
+    "GOTO lbl;", "lbl:", "a :", "ERROR:", "CASE:", 'TPWrite "a;b ENDIF";',
+    "MoveL Offs(p1,0,0,n*2),v100,z1,tool0;",
     "! ENDIF in a comment\n", "EXIT;", "Foo \\A:=1, b;", "RAISE;", "RETRY;",
     "CONNECT iStop WITH t;", "CONNECT a{1} WITH t;", "CONNECT with WITH WITH;",
 ]
