@@ -285,17 +285,9 @@ class Reader:
     def _if(self, head: re.Match[str]) -> Any:
         """An IF's node from its head on: its branches, an ELSE, the ENDIF."""
         text, builder = self.text, self.builder
-        rest: list = []
-        body, word, at, end = self._body(head.end(), "ELSEIF", "ELSE", "ENDIF")
-        rest += body
-        while word == "ELSEIF":
-            clause = self.heads["elseif"](text, at)
-            if clause is None:
-                raise _Unread(at)
-            body, word, next_at, end = self._body(clause.end(), "ELSEIF", "ELSE", "ENDIF")
-            rest.append(builder.fast_elseif_clause(
-                _token("FAST_ELSEIF", text, at, clause.end()), *body))
-            at = next_at
+        rest, word, at, end = self._body(head.end(), "ELSEIF", "ELSE", "ENDIF")
+        clauses, word, at, end = self._clauses("elseif", word, at, end, "ELSE", "ENDIF")
+        rest += clauses
         if word == "ELSE":
             else_token = _token("ELSE", text, at, end)
             body, word, at, end = self._body(end, "ENDIF")
@@ -303,23 +295,34 @@ class Reader:
         return builder.fast_if_stmt(_token("FAST_IF", text, head.start(), head.end()), *rest,
                                     _token("ENDIF", text, at, end))
 
+    def _clauses(self, kind: str, word: str, at: int, end: int, *after: str
+                 ) -> tuple[list, str, int, int]:
+        """The ELSEIF (`kind` 'elseif') or CASE ('case') clauses from the keyword `word`
+        at `at` (ending at `end`) on, each its head and statements up to its own keyword
+        or one of `after` (else _Unread); then the keyword after them, its start and
+        end."""
+        text, keyword = self.text, kind.upper()
+        make = self.builder.fast_elseif_clause if kind == "elseif" else \
+            self.builder.fast_case_clause
+        clauses: list = []
+        while word == keyword:
+            clause = self.heads[kind](text, at)
+            if clause is None:
+                raise _Unread(at)
+            body, word, next_at, end = self._body(clause.end(), keyword, *after)
+            clauses.append(make(_token(f"FAST_{keyword}", text, at, clause.end()), *body))
+            at = next_at
+        return clauses, word, at, end
+
     def _test(self, head: re.Match[str]) -> Any:
         """A TEST's node from its head on: CASE clauses, a DEFAULT, the ENDTEST."""
         text, builder = self.text, self.builder
-        clauses: list = []
         at = _GAP.match(text, head.end()).end()
         keyword = _CLOSING.match(text, at)
         if keyword is None:
             raise _Unread(at)
-        word, end = keyword.group().upper(), keyword.end()
-        while word == "CASE":
-            clause = self.heads["case"](text, at)
-            if clause is None:
-                raise _Unread(at)
-            body, word, next_at, end = self._body(clause.end(), "CASE", "DEFAULT", "ENDTEST")
-            clauses.append(builder.fast_case_clause(
-                _token("FAST_CASE", text, at, clause.end()), *body))
-            at = next_at
+        clauses, word, at, end = self._clauses("case", keyword.group().upper(), at,
+                                               keyword.end(), "DEFAULT", "ENDTEST")
         if word == "DEFAULT":
             default_token = _token("DEFAULT", text, at, end)
             colon = _DEFAULT_COLON.match(text, default_token.end_pos)
