@@ -124,9 +124,6 @@ class _Word:
         return self.text[self.start_pos:self.end_pos]
 
 
-_token = _Word
-
-
 class Reader:
     """Reads statement lists, compound statements and routines of one text.
 
@@ -195,7 +192,7 @@ class Reader:
             if head is not None:
                 if kind == "return":
                     node = self.builder.fast_return_stmt(
-                        _token("FAST_RETURN", text, at, head.end()))
+                        _Word("FAST_RETURN", text, at, head.end()))
                 elif top:
                     try:
                         node = self.compound(kind, head)
@@ -219,7 +216,7 @@ class Reader:
                 continue
             word = plain.group(1).upper()
             node = getattr(self.builder, f"{word.lower()}_stmt")(
-                _token(word, text, at, plain.end(1)), _token("SEMI", text, plain.end() - 1,
+                _Word(word, text, at, plain.end(1)), _Word("SEMI", text, plain.end() - 1,
                                                            plain.end()))
             done[pos] = (node.end, [node])
             out.append(node)
@@ -231,8 +228,8 @@ class Reader:
         if m is None or m.group(1).upper() in self.keywords:
             return None
         text = self.text
-        return self.builder.label(_token("NAME", text, *m.span(1)),
-                                  _token("COLON", text, m.end() - 1, m.end()))
+        return self.builder.label(_Word("NAME", text, *m.span(1)),
+                                  _Word("COLON", text, m.end() - 1, m.end()))
 
     def _connect(self, at: int) -> Any:
         """The node of `CONNECT name WITH trap;` at `at`, or None."""
@@ -240,10 +237,10 @@ class Reader:
         if m is None:
             return None
         text, builder = self.text, self.builder
-        target = builder.name_ref(_token("NAME", text, m.start(1), m.end(1)))
+        target = builder.name_ref(_Word("NAME", text, m.start(1), m.end(1)))
         return builder.connect_stmt(
-            _token("CONNECT", text, at, at + 7), target, _token("WITH", text, *m.span(2)),
-            _token("NAME", text, *m.span(3)), _token("SEMI", text, m.end() - 1, m.end()))
+            _Word("CONNECT", text, at, at + 7), target, _Word("WITH", text, *m.span(2)),
+            _Word("NAME", text, *m.span(3)), _Word("SEMI", text, m.end() - 1, m.end()))
 
     def _body(self, pos: int, *closing: str) -> tuple[list, str, int, int]:
         """Statements up to one of the `closing` keywords, or _Unread."""
@@ -268,8 +265,8 @@ class Reader:
                 body, _, at, end = self._body(head.end(), closing)
                 make = self.builder.fast_while_stmt if kind == "while" else \
                     self.builder.fast_for_stmt
-                node = make(_token(f"FAST_{kind.upper()}", self.text, head.start(), head.end()),
-                            *body, _token(closing, self.text, at, end))
+                node = make(_Word(f"FAST_{kind.upper()}", self.text, head.start(), head.end()),
+                            *body, _Word(closing, self.text, at, end))
         finally:
             self.depth -= 1
         self._forget_inside(mark)
@@ -289,11 +286,11 @@ class Reader:
         clauses, word, at, end = self._clauses("elseif", word, at, end, "ELSE", "ENDIF")
         rest += clauses
         if word == "ELSE":
-            else_token = _token("ELSE", text, at, end)
+            else_token = _Word("ELSE", text, at, end)
             body, word, at, end = self._body(end, "ENDIF")
             rest.append(builder.else_clause(else_token, *body))
-        return builder.fast_if_stmt(_token("FAST_IF", text, head.start(), head.end()), *rest,
-                                    _token("ENDIF", text, at, end))
+        return builder.fast_if_stmt(_Word("FAST_IF", text, head.start(), head.end()), *rest,
+                                    _Word("ENDIF", text, at, end))
 
     def _clauses(self, kind: str, word: str, at: int, end: int, *after: str
                  ) -> tuple[list, str, int, int]:
@@ -310,7 +307,7 @@ class Reader:
             if clause is None:
                 raise _Unread(at)
             body, word, next_at, end = self._body(clause.end(), keyword, *after)
-            clauses.append(make(_token(f"FAST_{keyword}", text, at, clause.end()), *body))
+            clauses.append(make(_Word(f"FAST_{keyword}", text, at, clause.end()), *body))
             at = next_at
         return clauses, word, at, end
 
@@ -324,7 +321,7 @@ class Reader:
         clauses, word, at, end = self._clauses("case", keyword.group().upper(), at,
                                                keyword.end(), "DEFAULT", "ENDTEST")
         if word == "DEFAULT":
-            default_token = _token("DEFAULT", text, at, end)
+            default_token = _Word("DEFAULT", text, at, end)
             colon = _DEFAULT_COLON.match(text, default_token.end_pos)
             if colon is None:
                 raise _Unread(at)
@@ -332,8 +329,8 @@ class Reader:
             clauses.append(builder.default_clause(default_token, *body))
         if word != "ENDTEST":
             raise _Unread(at)
-        return builder.fast_test_stmt(_token("FAST_TEST", text, head.start(), head.end()),
-                                      *clauses, _token("ENDTEST", text, at, end))
+        return builder.fast_test_stmt(_Word("FAST_TEST", text, head.start(), head.end()),
+                                      *clauses, _Word("ENDTEST", text, at, end))
 
     # ------------------------------------------------------------ routines
     def routine(self, head: re.Match[str], kind: str) -> Any:
@@ -361,7 +358,7 @@ class Reader:
             if word not in ("ERROR", "UNDO", "BACKWARD") or (
                     word == "ERROR" and _NUMBERS.match(text, end)):
                 raise _Unread(at)
-            handler_token = _token(word, text, at, end)
+            handler_token = _Word(word, text, at, end)
             body, word, at, end = self._handler_body(end, closing)
             handler = {"ERROR": self.builder.error_handler, "UNDO": self.builder.undo_handler,
                        "BACKWARD": self.builder.backward_handler}[handler_token.type]
@@ -371,15 +368,15 @@ class Reader:
                 break
             pos = at  # the next handler's keyword
         self._forget_inside(mark)
-        end_word = _token(closing, text, at, end)
+        end_word = _Word(closing, text, at, end)
         if kind == "trap":  # the plain rule's words: LOCAL? TRAP NAME
             local = head.start(1) >= 0
-            words = [_token("LOCAL", text, head.start(1), head.end(1))] if local else []
-            words += [_token("TRAP", text, head.start(2), head.end(2)),
-                      _token("NAME", text, head.start(3), head.end(3))]
+            words = [_Word("LOCAL", text, head.start(1), head.end(1))] if local else []
+            words += [_Word("TRAP", text, head.start(2), head.end(2)),
+                      _Word("NAME", text, head.start(3), head.end(3))]
             return self.builder.trap(*words, *items, end_word)
         return self.builder._fast_routine(
-            kind.upper(), _token(f"FAST_{kind.upper()}", text, head.start(), head.end()),
+            kind.upper(), _Word(f"FAST_{kind.upper()}", text, head.start(), head.end()),
             (*items, end_word))
 
     def _handler_body(self, pos: int, closing: str) -> tuple[list, str, int, int]:
