@@ -346,7 +346,11 @@ class Reader:
             at = _GAP.match(text, pos).end()
             decls = None if handlers else self.decls(text, at)
             if decls is not None:
-                items += self.split_decls(decls.group(), at)
+                # kept as a piece too: were the routine not to read, the parser gets its
+                # data where it reaches it, among its statements (a body takes both)
+                nodes = self.split_decls(decls.group(), at)
+                self.done[pos] = (decls.end(), nodes)
+                items += nodes
                 pos = decls.end()
                 continue
             body, pos, word, at, end = self.statements(pos)

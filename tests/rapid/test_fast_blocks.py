@@ -36,16 +36,17 @@ def tokens(text: str) -> list[str]:
 
 
 def counted_runs(monkeypatch) -> list[tuple[str, int]]:
-    """The (text, offset) of every run of calls the reader splits, from now on."""
+    """The (text, offset) of every run of calls or declarations split from now on, by the
+    reader or by the parser's callbacks."""
     seen: list[tuple[str, int]] = []
-    split = fastpath.split_calls
-
-    def counting(text: str, base: int) -> list:
-        seen.append((text, base))
-        return split(text, base)
-
     lexer = fast_parser().parser.lexer.lex.__self__
-    monkeypatch.setattr(lexer, "split_calls", counting)
+    for name in ("split_calls", "split_decls"):
+        def counting(text: str, base: int, split=getattr(fastpath, name)) -> list:
+            seen.append((text, base))
+            return split(text, base)
+
+        monkeypatch.setattr(lexer, name, counting)
+        monkeypatch.setattr(fastpath, name, counting)
     return seen
 
 
@@ -134,12 +135,12 @@ def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_rea
     """Deep in a block, a statement the reader cannot read: the blocks around it are
     the parser's, what the reader had read complete is given as it was (each run of
     calls split once), and the reader reads on after it."""
-    text = NESTED.replace("i:=3;", piece) + "\n"
+    text = NESTED.replace("i:=3;", piece).replace("PROC main()", "PROC main()\n  VAR num k;")
     text = text.replace("ENDMODULE", "PROC two()\n  IF a THEN\n    Stop;\n  ENDIF\nENDPROC\n"
                         "ENDMODULE")
     runs = counted_runs(monkeypatch)
     assert shape(parse_text(text)) == plain_tree(text)
-    assert len(runs) == len(set(runs))
+    assert len(runs) == len(set(runs)) and any("VAR num k" in run for run, _ in runs)
     kinds = tokens(text)
     assert kinds[2] == "FAST_PROC"  # the routine holding it is the parser's
     assert "FAST_ROUTINES" in kinds[-3:]  # the routine after it is read whole
