@@ -37,7 +37,7 @@ from typing import Any
 from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedToken
 
-from rapidfix.rapid.fast_expressions import LATIN1_LETTERS
+from rapidfix.rapid.fast_expressions import LATIN1_LETTERS, STRING
 from rapidfix.rapid.lexer_patterns import compiled_alone
 
 BLOCK = "FAST_BLOCK"
@@ -51,7 +51,8 @@ PATTERNS = ("FAST_CALLS", "FAST_DECLS", *(f"FAST_{kind.upper()}" for kind in _HE
 _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_stmt",
               "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
               "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
-              "connect_stmt", "name_ref", "label", "error_handler", "undo_handler",
+              "connect_stmt", "name_ref", "label", "procedure_call", "arguments",
+              "required_argument", "error_handler", "undo_handler",
               "backward_handler", "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
 #: those terminals see them)
@@ -76,7 +77,9 @@ _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
 # The first letters of what the lexer has the reader try: a compound statement where
 # the parser may take a statement, a routine (or a declaration) where it may take a
 # module item.
-_STATEMENT_OPENERS = frozenset("IiWwFfTt")
+_STATEMENT_OPENERS = frozenset(
+    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+    + "".join(map(chr, [*range(0xC0, 0xD7), *range(0xD8, 0xF7), *range(0xF8, 0x100)])))
 _ITEM_OPENERS = frozenset("PpFfLlTt")
 # The statements of a keyword and `;` (in error handlers mostly).
 _KEYWORD_STATEMENT = re.compile(
@@ -91,6 +94,17 @@ _TRAP_HEAD = re.compile(rf"(?:(?i:(LOCAL))[ \t\f\v\r\n\x1a]+)?(?i:(TRAP)){_WORD_
 _CONNECT = re.compile(rf"(?i:CONNECT){_WORD_END}[ \t\f\v\r\n\x1a]*({_NAME})"
                       rf"[ \t\f\v\r\n\x1a]*(?i:(WITH)){_WORD_END}[ \t\f\v\r\n\x1a]*"
                       rf"({_NAME})[ \t\f\v\r\n\x1a]*;")
+# An assignment found loosely (its pieces are read exactly, or it is left to the parser):
+# a target (a name, components, indices without braces inside), `:=` (group 2), a value
+# up to the first `;` outside a string.
+_ASSIGNMENT = re.compile(
+    rf"({_NAME})(?:[ \t\f\v\r\n\x1a]*(?:\.[ \t\f\v\r\n\x1a]*{_NAME}"
+    rf"|\{{(?:[^{{}};\"]|{STRING})*\}}))*[ \t\f\v\r\n\x1a]*(:=)(?:[^;\"]|{STRING})*;")
+# A procedure call of one value found loosely (the value is read exactly, or the call is
+# left to the parser): the name, whitespace, the value (group 2: not an optional
+# argument, a named one or none) up to the first `;` outside a string.
+_ONE_ARGUMENT = re.compile(
+    rf"({_NAME})[ \t\f\v\r\n\x1a]+(?![:=\\,;])((?:[^;\"]|{STRING})+);")
 # A label, `name:` (not `name:=`), its name in a group.
 _LABEL = re.compile(rf"({_NAME})[ \t\f\v\r\n\x1a]*:(?!=)")
 # What follows ERROR when its handler names error numbers: left to the parser.
@@ -130,14 +144,19 @@ class Reader:
     `patterns` are the compiled fast terminals by name (FAST_CALLS, FAST_DECLS and the
     heads); `split_calls` and `split_decls` turn a run's text into its nodes, `builder`
     is the fast path's syntax builder (its callbacks make the compound nodes), `keywords`
-    the grammar's keywords (upper case).
+    the grammar's keywords (upper case), `assignment` reads an assignment no run takes
+    (its text, where it starts, its `:=` and its end) and `value` a value (its text and
+    where it stands), each None where it does not read.
     """
 
     def __init__(self, text: str, patterns: dict[str, re.Pattern[str]], builder: Any,
                  split_calls: Callable[[str, int], list], split_decls: Callable[[str, int], list],
-                 keywords: frozenset[str]) -> None:
+                 keywords: frozenset[str], assignment: Callable[[str, int, int, int], Any],
+                 value: Callable[[str, int], Any]) -> None:
         self.text = text
         self.keywords = keywords
+        self.assignment = assignment
+        self.value = value
         self.calls = patterns["FAST_CALLS"].match
         self.decls = patterns["FAST_DECLS"].match
         self.heads = {kind: patterns[f"FAST_{kind.upper()}"].match for kind in _HEADS}
@@ -207,7 +226,8 @@ class Reader:
                 continue
             plain = _KEYWORD_STATEMENT.match(text, at)
             if plain is None:
-                node = self._connect(at) or self._label(at)
+                node = (self._assignment(at) or self._connect(at) or self._label(at)
+                        or self._call(at))
                 if node is None:
                     return out, pos, None, at, at
                 done[pos] = (node.end, [node])
@@ -221,6 +241,30 @@ class Reader:
             done[pos] = (node.end, [node])
             out.append(node)
             pos = node.end
+
+    def _assignment(self, at: int) -> Any:
+        """The node of an assignment at `at` that no run of calls takes (its value an
+        expression the patterns of runs leave out: parentheses in an aggregate, calls in
+        a sum), or None."""
+        m = _ASSIGNMENT.match(self.text, at)
+        if m is None or m.group(1).upper() in self.keywords:
+            return None
+        return self.assignment(self.text, at, m.start(2), m.end())
+
+    def _call(self, at: int) -> Any:
+        """The node of a procedure call of one value that no run of calls takes
+        (`WaitUntil stReact = ["Ready", "Ready"];`), or None."""
+        m = _ONE_ARGUMENT.match(self.text, at)
+        if m is None or m.group(1).upper() in self.keywords:
+            return None
+        text, builder = self.text, self.builder
+        value = self.value(m.group(2).rstrip(" \t\f\v\r\n\x1a"), m.start(2))
+        if value is None:
+            return None
+        return builder.procedure_call(
+            _Word("NAME", text, *m.span(1)),
+            builder.arguments(builder.required_argument(value)),
+            _Word("SEMI", text, m.end() - 1, m.end()))
 
     def _label(self, at: int) -> Any:
         """The node of a label `name:` at `at` (its name no keyword), or None."""
@@ -429,8 +473,12 @@ class BlockLexer:
     """The `lex` of a contextual lexer, with the reader run ahead where it may."""
 
     def __init__(self, lexer: Any, builder: Any, split_calls: Callable[[str, int], list],
-                 split_decls: Callable[[str, int], list]) -> None:
+                 split_decls: Callable[[str, int], list],
+                 assignment: Callable[[str, int, int, int], Any],
+                 value: Callable[[str, int], Any]) -> None:
         self.lexer = lexer
+        self.assignment = assignment
+        self.value = value
         self._patterns: dict[str, re.Pattern[str]] | None = None
         # the builder's callbacks, bound once (each lookup of a Lark v_args method makes
         # a wrapper)
@@ -481,7 +529,7 @@ class BlockLexer:
                             if reader is None:
                                 reader = Reader(text, self.patterns(), self.builder,
                                                 self.split_calls, self.split_decls,
-                                                self.keywords)
+                                                self.keywords, self.assignment, self.value)
                             token = self._read(reader, statements, pos)
                     if token is not None:
                         _advance(line_ctr, text, token.start_pos)  # the gap, as Lark skips it

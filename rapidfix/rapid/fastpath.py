@@ -1374,6 +1374,35 @@ def _assignment(text: str, base: int, start: int, assign: int, end: int) -> s.As
     return s.Assignment(target.start, base + end, target, value)
 
 
+# What the grammar's `target` builds (an assignment's left side).
+_TARGETS = (s.NameRef, s.Index, s.Component)
+
+
+def read_assignment(text: str, start: int, assign: int, end: int) -> s.Assignment | None:
+    """The Assignment node of text[start:end] (a target, `:=` at `assign`, a value up to
+    the `;` before `end`) that no fast terminal took, its pieces read by the expression
+    reader (exact: the lexer has checked nothing here), or None where they do not read
+    (fast_blocks then leaves the statement to the parser)."""
+    raw = text[assign + 2:end - 1]
+    value_text = raw.strip(_WS_CHARS)
+    if not value_text:
+        return None
+    target = read_value(text[start:assign].rstrip(_WS_CHARS), start)
+    if type(target) not in _TARGETS:
+        return None
+    value = read_value(value_text, assign + 2 + len(raw) - len(raw.lstrip(_WS_CHARS)))
+    return None if value is None else s.Assignment(target.start, end, target, value)
+
+
+def read_value(text: str, start: int) -> s.Expr | None:
+    """The node of an expression `text` at `start` that no fast terminal took, read by
+    the expression reader (exact), or None where it does not read."""
+    try:
+        return _read(text, start)
+    except NotFast:
+        return None
+
+
 # The end of an aggregate's first group and the start of the next, with whitespace
 # (`[[x, y, z], [q1, ...], ...]`, as many programs are written by hand)
 _NEXT_GROUP = re.compile(rf"\]{_AGGREGATE_WS}*,{_AGGREGATE_WS}*\[")
@@ -1696,7 +1725,8 @@ def fast_parser() -> Lark:
         cache=True,
     ))
     lexer = parser.parser.lexer  # its lex, with fast_blocks' reader ahead of it
-    lexer.lex = fast_blocks.BlockLexer(lexer, builder, split_calls, split_decls).lex
+    lexer.lex = fast_blocks.BlockLexer(lexer, builder, split_calls, split_decls,
+                                       read_assignment, read_value).lex
     return parser
 
 
