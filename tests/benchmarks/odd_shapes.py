@@ -103,7 +103,7 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
               "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
-              "record_tables", "multimove", "one_line", "labels")
+              "record_tables", "multimove", "one_line", "labels", "computed")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -250,6 +250,21 @@ def _labels(n: int) -> list[str]:
                 "      nTry:=nTry + 1;", "      IF nTry < 0 GOTO lRetry;", "    ENDWHILE",
                 "  ENDPROC"]
     return [*out, "ENDMODULE"]
+
+
+def _computed(n: int) -> list[str]:
+    """Hand-written arithmetic the runs of calls do not take: a target's position set
+    from sums with parentheses before each move, then a WaitUntil of a relation to an
+    aggregate of strings, or an assignment of a call of parenthesised sums."""
+    out = [*_head("Computed"), "  VAR robtarget pCur;", "  VAR num nX:=1;", "  VAR num nY:=2;",
+           "  VAR num nZ:=3;", "  VAR num nDx:=0.5;", "  VAR string stReact{3};",
+           "  VAR num i:=0;", *_decls(1), "  PROC main()", "    pCur:=p0;"]
+    for k in range(n):
+        out += [f"    pCur.trans:=[nX+({k % 100}*nDx),nY-(2*nDx),nZ];",
+                "    MoveL pCur,v100,z1,tMill\\WObj:=wPlate;",
+                '    WaitUntil stReact=["Ready","Ready","Ready"];' if k % 2 == 0
+                else "    i:=Trunc((nX-nY)*1000);"]
+    return [*out, "  ENDPROC", "ENDMODULE"]
 
 
 def _assign(n: int) -> list[str]:
@@ -775,7 +790,7 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "long_names": _long_names, "deep_calls": _deep_calls,
              "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
              "record_tables": _record_tables, "multimove": _multimove, "one_line": _one_line,
-             "labels": _labels}
+             "labels": _labels, "computed": _computed}
 #: shapes whose statements share one line: their lines are counted as those of the shape
 #: written a statement to a line
 _PACKED = {"one_line": "hand_offs"}

@@ -86,7 +86,8 @@ def test_read_ahead(monkeypatch):
     from rapidfix.rapid import fast_blocks, parse_program
 
     shapes = [s for s in os.environ.get("RAPIDFIX_BENCH_ODD_SHAPES", "").split(",") if s] or [
-        "deep", "many_procs", "labels", "conditions", "loops", "failing", "control"]
+        "deep", "many_procs", "labels", "computed", "conditions", "loops", "failing",
+        "control"]
     parse_program("MODULE M\nENDMODULE\n")
     rows = []
     for shape in shapes:
