@@ -254,16 +254,18 @@ def _labels(n: int) -> list[str]:
 
 def _computed(n: int) -> list[str]:
     """Hand-written arithmetic the runs of calls do not take: a target's position set
-    from sums with parentheses before each move, then a WaitUntil of a relation to an
-    aggregate of strings, or an assignment of a call of parenthesised sums."""
+    from sums with parentheses before a move to it (left as written: its target is set
+    at run time), then a WaitUntil of a relation to an aggregate of strings, or an
+    assignment of a call of parenthesised sums, and a move to a declared target."""
     out = [*_head("Computed"), "  VAR robtarget pCur;", "  VAR num nX:=1;", "  VAR num nY:=2;",
            "  VAR num nZ:=3;", "  VAR num nDx:=0.5;", "  VAR string stReact{3};",
-           "  VAR num i:=0;", *_decls(1), "  PROC main()", "    pCur:=p0;"]
+           "  VAR num i:=0;", *_decls(n), "  PROC main()", "    pCur:=p0;"]
     for k in range(n):
         out += [f"    pCur.trans:=[nX+({k % 100}*nDx),nY-(2*nDx),nZ];",
                 "    MoveL pCur,v100,z1,tMill\\WObj:=wPlate;",
                 '    WaitUntil stReact=["Ready","Ready","Ready"];' if k % 2 == 0
-                else "    i:=Trunc((nX-nY)*1000);"]
+                else "    i:=Trunc((nX-nY)*1000);",
+                f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"]
     return [*out, "  ENDPROC", "ENDMODULE"]
 
 
