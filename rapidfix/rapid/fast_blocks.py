@@ -7,24 +7,26 @@ head and `ENDPROC`, at some 20 µs a token. A program whose moves stand inside n
 IF / WHILE / TEST blocks, or in many small routines, spent half its parse there.
 
 Here the contextual lexer is given a reader that runs ahead of it. Where the parser
-may take a statement and the text opens a compound statement, or where it may take a
-module item and the text opens a routine, the reader reads as far as it can read
-exactly, with the fast terminals' own patterns (runs of calls and of declarations,
-compound heads) and the keywords that close each construct, and builds the syntax
-nodes the grammar's rules build (through the fast path's own callbacks). What it read
-becomes one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
-(`_fast_block`, `_fast_routines`) splice them where the parser stands. A piece it cannot
-read (a label, a late call, an ERROR handler with numbers, a statement no fast terminal
-takes, a syntax error) ends the token before the outermost construct that holds it,
-and Lark reads on from there as before.
+may take a statement, or a module item and the text opens a routine, the reader reads
+as far as it can read exactly, with the fast terminals' own patterns (runs of calls
+and of declarations, compound heads) and the keywords that close each construct, and
+builds the syntax nodes the grammar's rules build (through the fast path's own
+callbacks). An assignment or a call of one value that no run takes (parentheses in an
+aggregate, calls in a sum) is found loosely and its pieces read by the expression
+reader, which builds exactly what the grammar builds or gives up. What it read becomes
+one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
+(`_fast_block`, `_fast_routines`) splice them where the parser stands. A piece it
+cannot read (a late call, an ERROR handler with numbers, a call of several values no
+run takes, a syntax error) ends the token before the outermost construct that holds
+it, and Lark reads on from there as before.
 
-Inside a construct that fails, what was read complete (each run of calls and each
-compound statement) is kept by position, and the lexer hands it out when the parser
-reaches it; reading ahead starts again past the failure. So nothing is read twice,
-however deep the failure, and the reader's work stays linear in the text. The grammar
-stays the definition of the language: the reader takes a construct only where every
-piece is one the lexer would give that parser state, and the equivalence tests parse
-everything both ways (tests/rapid/test_fast_blocks.py).
+Inside a construct that fails, what was read complete (each run of calls or of a
+routine's declarations, each statement) is kept by position, and the lexer hands it
+out when the parser reaches it; reading ahead starts again past the failure. So
+nothing is read twice, however deep the failure, and the reader's work stays linear in
+the text. The grammar stays the definition of the language: the reader takes a
+construct only where every piece is one the lexer would give that parser state, and
+the equivalence tests parse everything both ways (tests/rapid/test_fast_blocks.py).
 """
 
 from __future__ import annotations
@@ -74,9 +76,8 @@ _DEFAULT_COLON = re.compile(r"[ \t\f\v\r\n\x1a]*:")
 # The statements a fast head opens (or is: RETURN), by their first letter.
 _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
               for letter in (kind[0], kind[0].upper())}
-# The first letters of what the lexer has the reader try: a compound statement where
-# the parser may take a statement, a routine (or a declaration) where it may take a
-# module item.
+# The first letters of what the lexer has the reader try: a statement where the parser
+# may take one, a routine (or a declaration) where it may take a module item.
 _STATEMENT_OPENERS = frozenset(
     "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
     + "".join(map(chr, [*range(0xC0, 0xD7), *range(0xD8, 0xF7), *range(0xF8, 0x100)])))
