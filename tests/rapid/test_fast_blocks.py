@@ -182,6 +182,28 @@ def test_errors_in_and_after_read_blocks_are_explained_as_without_the_reader(
     assert message == _message(text, monkeypatch, windows=False)
 
 
+@pytest.mark.parametrize("statement", [
+    "pCur.trans:=[nX+(2*nDx),nY-(2*nDx),nZ];", "i:=Trunc((a-b)*1000);",
+    'WaitUntil stReact=["Ready","",""];', "Foo Sqrt(Pow(p.x,2)+Pow(p.y,2));",
+])
+def test_statements_no_run_takes_are_read_in_the_block(statement):
+    """An assignment or a call of one value whose value the runs' patterns leave out:
+    found loosely, read by the expression reader, in the routine's one token."""
+    text = routine("IF a THEN", f"  {statement}", f"  {MOVE}", "ENDIF")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert_parses_as_plain(text)
+
+
+@pytest.mark.parametrize("statement", [
+    "x := path{\u0661};", "Foo path{\u0661};", "x := 1 2;", "Foo a := 1;", "Foo a, b := 2;",
+])
+def test_statements_found_loosely_are_the_grammars_or_the_parsers(statement):
+    """Found by the property test: `path{١}` (an Arabic-Indic digit, a NUMBER to the
+    grammar) was read as an index without its number by the runs' splitter, which trusts
+    the lexer's check; the expression reader reads it as the grammar does, or leaves it."""
+    assert_parses_as_plain(routine("IF a THEN", f"  {statement}", "ENDIF"))
+
+
 def test_blocks_nested_deeper_than_the_limit_parse_to_the_plain_tree():
     """The outer blocks are the parser's, the inner ones read as one."""
     depth = fast_blocks.DEPTH_LIMIT + 10
