@@ -86,9 +86,16 @@ def error_offset(err: UnexpectedInput, text: str) -> int:
 
 
 def _last(pattern: re.Pattern[str], text: str, start: int, end: int) -> int:
-    """Offset of the keyword of the last match of `pattern` in text[start:end], or -1."""
+    """Offset of the keyword of the last match of `pattern` in text[start:end], or -1.
+
+    The keyword is matched in its whole line, so that an error inside a word does not
+    cut it into one (`CONST1_a`, an error at its `1` when the parser read `CONST` as the
+    keyword: no item starts there, and the window must keep the item before)."""
     found = -1
-    for match in pattern.finditer(text, start, end):
+    line_end = text.find("\n", end)
+    for match in pattern.finditer(text, start, len(text) if line_end < 0 else line_end):
+        if match.end(1) > end:
+            break
         found = match.start(1)
     return found
 

@@ -37,9 +37,9 @@ from types import SimpleNamespace
 from typing import Any
 
 from lark import Token
-from lark.exceptions import UnexpectedCharacters, UnexpectedToken
+from lark.exceptions import UnexpectedCharacters
 
-from rapidfix.rapid.fast_expressions import LATIN1_LETTERS, STRING
+from rapidfix.rapid.fast_expressions import GAP, NAME, STRING, WORD_END, WS
 from rapidfix.rapid.lexer_patterns import compiled_alone
 
 BLOCK = "FAST_BLOCK"
@@ -62,17 +62,16 @@ READ_AHEAD = True
 #: compound statements nested deeper than this are left to the parser (Python's stack)
 DEPTH_LIMIT = 48
 
-_WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
-# Whitespace and comments (a comment with its newline), as between fast statements.
-_GAP = re.compile(r"[ \t\f\v\r\n\x1a]*(?:![^\n]*\n[ \t\f\v\r\n\x1a]*)*")
+# Whitespace and comments, as between the statements of a run.
+_GAP = re.compile(GAP)
 # The keywords that close a statement list (a clause, a routine's body or handler).
 _CLOSING = re.compile(
     rf"(?i:ENDIF|ELSEIF|ELSE|ENDWHILE|ENDFOR|ENDTEST|ENDPROC|ENDFUNC|ENDTRAP|ERROR|UNDO|BACKWARD"
-    rf"|CASE|DEFAULT){_WORD_END}")
+    rf"|CASE|DEFAULT){WORD_END}")
 _CLOSING_FIRST = frozenset("EeUuBbCcDd")
 # An ENDIF later on the line: an IF head may then begin an IF block that a run takes.
 _ENDIF_ON_LINE = re.compile(r"[^\n]*(?i:ENDIF)")
-_DEFAULT_COLON = re.compile(r"[ \t\f\v\r\n\x1a]*:")
+_DEFAULT_COLON = re.compile(rf"{WS}*:")
 # The statements a fast head opens (or is: RETURN), by their first letter.
 _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
               for letter in (kind[0], kind[0].upper())}
@@ -84,32 +83,30 @@ _STATEMENT_OPENERS = frozenset(
 _ITEM_OPENERS = frozenset("PpFfLlTt")
 # The statements of a keyword and `;` (in error handlers mostly).
 _KEYWORD_STATEMENT = re.compile(
-    rf"(?i:(RETRY|TRYNEXT|EXIT|RAISE)){_WORD_END}[ \t\f\v\r\n\x1a]*;")
+    rf"(?i:(RETRY|TRYNEXT|EXIT|RAISE)){WORD_END}{WS}*;")
 # The start of a routine's head.
-_ROUTINE_HEAD = re.compile(rf"(?i:(?:LOCAL[ \t\f\v\r\n\x1a]+)?(?:PROC|FUNC|TRAP)){_WORD_END}")
+_ROUTINE_HEAD = re.compile(rf"(?i:(?:LOCAL{WS}+)?(?:PROC|FUNC|TRAP)){WORD_END}")
 # A trap routine's head (no fast terminal takes it): LOCAL, TRAP and the name in groups.
-_NAME = rf"[A-Za-z{LATIN1_LETTERS}][A-Za-z0-9_{LATIN1_LETTERS}]*{_WORD_END}"
-_TRAP_HEAD = re.compile(rf"(?:(?i:(LOCAL))[ \t\f\v\r\n\x1a]+)?(?i:(TRAP)){_WORD_END}"
-                        rf"[ \t\f\v\r\n\x1a]*({_NAME})")
+_NAME = rf"{NAME}{WORD_END}"
+_TRAP_HEAD = re.compile(rf"(?:(?i:(LOCAL)){WS}+)?(?i:(TRAP)){WORD_END}{WS}*({_NAME})")
 # `CONNECT name WITH trap;`, its names in groups.
-_CONNECT = re.compile(rf"(?i:CONNECT){_WORD_END}[ \t\f\v\r\n\x1a]*({_NAME})"
-                      rf"[ \t\f\v\r\n\x1a]*(?i:(WITH)){_WORD_END}[ \t\f\v\r\n\x1a]*"
-                      rf"({_NAME})[ \t\f\v\r\n\x1a]*;")
+_CONNECT = re.compile(rf"(?i:CONNECT){WORD_END}{WS}*({_NAME}){WS}*(?i:(WITH)){WORD_END}{WS}*"
+                      rf"({_NAME}){WS}*;")
 # An assignment found loosely (its pieces are read exactly, or it is left to the parser):
 # a target (a name, components, indices without braces inside), `:=` (group 2), a value
 # up to the first `;` outside a string.
 _ASSIGNMENT = re.compile(
-    rf"({_NAME})(?:[ \t\f\v\r\n\x1a]*(?:\.[ \t\f\v\r\n\x1a]*{_NAME}"
-    rf"|\{{(?:[^{{}};\"]|{STRING})*\}}))*[ \t\f\v\r\n\x1a]*(:=)(?:[^;\"]|{STRING})*;")
+    rf"({_NAME})(?:{WS}*(?:\.{WS}*{_NAME}|\{{(?:[^{{}};\"]|{STRING})*\}}))*{WS}*(:=)"
+    rf"(?:[^;\"]|{STRING})*;")
 # A procedure call of one value found loosely (the value is read exactly, or the call is
 # left to the parser): the name, whitespace, the value (group 2: not an optional
 # argument, a named one or none) up to the first `;` outside a string.
 _ONE_ARGUMENT = re.compile(
-    rf"({_NAME})[ \t\f\v\r\n\x1a]+(?![:=\\,;])((?:[^;\"]|{STRING})+);")
+    rf"({_NAME}){WS}+(?![:=\\,;])((?:[^;\"]|{STRING})+);")
 # A label, `name:` (not `name:=`), its name in a group.
-_LABEL = re.compile(rf"({_NAME})[ \t\f\v\r\n\x1a]*:(?!=)")
+_LABEL = re.compile(rf"({_NAME}){WS}*:(?!=)")
 # What follows ERROR when its handler names error numbers: left to the parser.
-_NUMBERS = re.compile(r"[ \t\f\v\r\n\x1a]*\(")
+_NUMBERS = re.compile(rf"{WS}*\(")
 
 
 class _Unread(Exception):
@@ -540,18 +537,16 @@ class BlockLexer:
                         lexer_state.last_token = token
                         yield token
                         continue
-                yield lexers[state].next_token(lexer_state, parser_state)
+                try:
+                    token = lexers[state].next_token(lexer_state, parser_state)
+                except UnexpectedCharacters:
+                    # Lark's own loop meets the same characters in the same state, and
+                    # says what it says of them
+                    yield from type(self.lexer).lex(self.lexer, lexer_state, parser_state)
+                    return
+                yield token
         except EOFError:
             pass
-        except UnexpectedCharacters as e:  # as Lark's ContextualLexer.lex
-            try:
-                last_token = lexer_state.last_token
-                token = self.lexer.root_lexer.next_token(lexer_state, parser_state)
-                raise UnexpectedToken(token, e.allowed, state=parser_state,
-                                      token_history=[last_token],
-                                      terminals_by_name=self.lexer.root_lexer.terminals_by_name)
-            except UnexpectedCharacters:
-                raise e from None
 
     def _opens(self, state: int, text: str, at: int) -> bool | None:
         """What the reader may find at `at` in parser state `state`: statements from a

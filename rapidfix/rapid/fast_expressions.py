@@ -51,6 +51,12 @@ NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
 LATIN1_LETTERS = r"\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
 NAME_START = rf"[A-Za-z{LATIN1_LETTERS}]"
 NAME = rf"{NAME_START}[A-Za-z0-9_{LATIN1_LETTERS}]*"
+# A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
+WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
+# What may stand between two statements of a run: whitespace and whole-line comments
+# (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
+# cut short on backtracking, so nothing inside it is ever read as a statement).
+GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
 # The grammar's STRING: `""` stands for a quote; backslashes and every separator may
 # stand inside. Written as runs between the doubled quotes: a repeated group of one
 # character made the engine keep a backtracking record per character (a 6 MB string
@@ -629,12 +635,14 @@ def read_expression(text: str, start: int, condition: bool = False) -> s.Expr:
 
 
 __all__ = [
+    "GAP",
     "NUMBER",
     "NUMERIC_AGGREGATE",
     "NUMERIC_AGGREGATE_MATCH",
     "PLAIN_VALUE",
     "STRING",
     "VALUE_TEXT",
+    "WORD_END",
     "WS",
     "NotRead",
     "condition_pattern",

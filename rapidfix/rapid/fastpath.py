@@ -76,12 +76,15 @@ from lark.exceptions import UnexpectedInput
 from rapidfix.rapid import fast_blocks, fast_expressions
 from rapidfix.rapid import syntax as s
 from rapidfix.rapid.error_window import confirms, error_offset, window
-from rapidfix.rapid.fast_expressions import (
+from rapidfix.rapid.fast_expressions import (  # (WS and GAP: also readback's)
+    GAP,
     LATIN1_LETTERS,
     NAME,
     NAME_START,
     PLAIN_VALUE,
     STRING,
+    WORD_END,
+    WS,
     NotRead,
     condition_pattern,
     expression_patterns,
@@ -99,14 +102,6 @@ from rapidfix.rapid.transform import (
     string_value,
 )
 
-# Exactly the grammar's WHITESPACE terminal (Python's \s would also take e.g. U+00A0).
-WS = r"[ \t\f\v\r\n\x1a]"
-# What may stand between two statements of a run: whitespace and whole-line comments
-# (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
-# cut short on backtracking, so nothing inside it is ever read as a statement).
-GAP = rf"{WS}*(?:![^\n]*\n{WS}*)*"
-# A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
-_WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
 # Whitespace inside an aggregate of numbers: the grammar's NUMERIC_AGGREGATE takes
 # Python's `\s` there, which holds every character of WS but \x1a (a DOS end of file,
 # whitespace between tokens): an aggregate with one inside is the grammar's aggregate of
@@ -166,7 +161,7 @@ def _keywords_after(prefix: str) -> list[str]:
 
 def _name(excluded: list[str]) -> str:
     """The NAME terminal, refusing the `excluded` keywords (grouped by first letter)."""
-    name = f"{NAME}{_WORD_END}"
+    name = f"{NAME}{WORD_END}"
     if not excluded:
         return name
     by_letter: dict[str, list[str]] = {}
@@ -175,7 +170,7 @@ def _name(excluded: list[str]) -> str:
     for word in sorted({w.upper() for w in excluded}, key=lambda w: (-len(w), w)):
         by_letter.setdefault(word[0], []).append(re.escape(word[1:]))
     alternatives = "|".join(f"{first}(?:{'|'.join(rest)})" for first, rest in by_letter.items())
-    return f"(?!(?i:{alternatives}){_WORD_END}){name}"
+    return f"(?!(?i:{alternatives}){WORD_END}){name}"
 
 
 @functools.lru_cache(maxsize=1)
@@ -204,7 +199,7 @@ def _patterns() -> dict[str, str]:
     # at a cost that grows with their length.
     expression = expression_patterns(
         {name: t.pattern.to_regexp() for name, t in terminals.items()}, value_name,
-        plain_name, _WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATES))
+        plain_name, WORD_END, (_LOOSE_AGGREGATE, _DEEP_AGGREGATES))
     value = expression["value"]
     # a procedure call, or an assignment: its value is taken by the arguments' pattern
     # (written once), and split_calls refuses (NotFast) what is more than one value
@@ -218,10 +213,10 @@ def _patterns() -> dict[str, str]:
     compact = expression["compact_condition"]
     # or a GOTO (`GOTO lRetry;`, or `IF n > 3 GOTO lDone;`)
     label = _name(_keywords_after("MODULE m\nPROC p()\nGOTO "))
-    goto = f"(?i:GOTO){_WORD_END}{WS}*{label}{WS}*;"
-    compact_head = (f"(?i:IF){_WORD_END}{WS}*({compact}){WS}+"
-                    f"(?={call_name}|(?i:GOTO){_WORD_END})")
-    call = (f"(?:(?i:IF){_WORD_END}{WS}*{compact}{WS}+)?"
+    goto = f"(?i:GOTO){WORD_END}{WS}*{label}{WS}*;"
+    compact_head = (f"(?i:IF){WORD_END}{WS}*({compact}){WS}+"
+                    f"(?={call_name}|(?i:GOTO){WORD_END})")
+    call = (f"(?:(?i:IF){WORD_END}{WS}*{compact}{WS}+)?"
             f"(?:{plain_call}|{general_call}|{goto})")
     # array dimensions: numbers or names of constants (`{50}`, `{2,3}`, `{nChannels,10}`)
     dim = f"(?:{number}|{value_name})"
@@ -232,7 +227,7 @@ def _patterns() -> dict[str, str]:
     # goes on after the THEN, and would otherwise find its ENDIF past an ELSEIF's THEN)
     then = _keyword("THEN")
     # (an ENDIF later on the line first: an IF over lines fails at once)
-    block_head = (rf"(?i:IF){_WORD_END}(?=[^\n]*(?i:ENDIF))"
+    block_head = (rf"(?i:IF){WORD_END}(?=[^\n]*(?i:ENDIF))"
                   rf"{condition_pattern(plain_name, then)}{then}")
     return {"call": call, "plain_call": plain_call, "general_call": general_call,
             "decl": decl, "block_head": block_head, "compact_head": compact_head,
@@ -241,7 +236,7 @@ def _patterns() -> dict[str, str]:
 
 def _keyword(words: str) -> str:
     """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
-    return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){_WORD_END}"
+    return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){WORD_END}"
 
 
 # A routine's parameters, as rapid.lark's `parameters` takes them but for alternatives
@@ -250,9 +245,9 @@ def _keyword(words: str) -> str:
 # it is one (the only keywords the grammar takes there: checked by `_patterns`); any
 # word after it, or after the type, is a name.
 ACCESS_WORDS = ("VAR", "PERS", "INOUT")
-_ACCESS = rf"(?i:{'|'.join(ACCESS_WORDS)}){_WORD_END}"
-_PARAMETER = (rf"(?:\\{WS}*)?(?:{_ACCESS}{WS}*{NAME}|(?!{_ACCESS}){NAME}){_WORD_END}{WS}*"
-              rf"{NAME}{_WORD_END}(?:{WS}*\{{{WS}*\*(?:{WS}*,{WS}*\*)*{WS}*\}})?")
+_ACCESS = rf"(?i:{'|'.join(ACCESS_WORDS)}){WORD_END}"
+_PARAMETER = (rf"(?:\\{WS}*)?(?:{_ACCESS}{WS}*{NAME}|(?!{_ACCESS}){NAME}){WORD_END}{WS}*"
+              rf"{NAME}{WORD_END}(?:{WS}*\{{{WS}*\*(?:{WS}*,{WS}*\*)*{WS}*\}})?")
 PARAMETERS = rf"{_PARAMETER}(?:(?:{WS}*,{WS}*|{WS}*(?=\\)){_PARAMETER})*"
 
 
@@ -262,26 +257,26 @@ def head_patterns(condition: str, groups: bool) -> dict[str, str]:
     FOR's variable; with `groups`, each of those in a group of its own (for splitting a
     token, whose syntax the lexer has checked)."""
     c = f"({condition})" if groups else condition
-    name = f"({NAME}){_WORD_END}" if groups else f"{NAME}{_WORD_END}"
+    name = f"({NAME}){WORD_END}" if groups else f"{NAME}{WORD_END}"
     params = f"({PARAMETERS})?" if groups else f"(?:{PARAMETERS})?"
 
     return {
-        "if": rf"(?i:IF){_WORD_END}{c}{_keyword('THEN')}",
-        "elseif": rf"(?i:ELSEIF){_WORD_END}{c}{_keyword('THEN')}",
-        "while": rf"(?i:WHILE){_WORD_END}{c}{_keyword('DO')}",
-        "for": (rf"(?i:FOR){_WORD_END}{WS}*{name}{WS}*(?i:FROM){_WORD_END}{c}{_keyword('TO')}"
+        "if": rf"(?i:IF){WORD_END}{c}{_keyword('THEN')}",
+        "elseif": rf"(?i:ELSEIF){WORD_END}{c}{_keyword('THEN')}",
+        "while": rf"(?i:WHILE){WORD_END}{c}{_keyword('DO')}",
+        "for": (rf"(?i:FOR){WORD_END}{WS}*{name}{WS}*(?i:FROM){WORD_END}{c}{_keyword('TO')}"
                 rf"{c}(?:{_keyword('STEP')}{c})?{_keyword('DO')}"),
         # (up to its first clause, which stays a token of its own: a token split is
         # that far already)
-        "test": rf"(?i:TEST){_WORD_END}{c}"
+        "test": rf"(?i:TEST){WORD_END}{c}"
                 + ("" if groups else f"(?={_keyword('CASE|DEFAULT|ENDTEST')})"),
-        "case": rf"(?i:CASE){_WORD_END}{c}:",
-        "return": rf"(?i:RETURN){_WORD_END}(?:{c})?;",
+        "case": rf"(?i:CASE){WORD_END}{c}:",
+        "return": rf"(?i:RETURN){WORD_END}(?:{c})?;",
         # a procedure's head up to its body (`LOCAL PROC Path_10()`, `PROC Pick(robtarget
         # p, \switch Slow)`), a function's (`FUNC num Twice(num x)`)
-        "proc": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:PROC){_WORD_END}"
+        "proc": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:PROC){WORD_END}"
                  rf"{WS}*{name}{WS}*\({WS}*{params}{WS}*\)"),
-        "func": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:FUNC){_WORD_END}"
+        "func": (rf"(?:(?i:{'(LOCAL)' if groups else 'LOCAL'}){WS}+)?(?i:FUNC){WORD_END}"
                  rf"{WS}*{name}{WS}*{name}{WS}*\({WS}*{params}{WS}*\)"),
     }
 
@@ -331,7 +326,7 @@ def grammar_extension(grammar: str) -> str:
     # (the calls in it by the general pattern alone: a block is rare, and each copy of
     # the plain one lengthens what every process compiles)
     if_block = (f"{p['block_head']}(?:[ \t]*{p['general_call']}){{0,{RUN_LIMIT}}}"
-                f"[ \t]*(?i:ENDIF){_WORD_END}")
+                f"[ \t]*(?i:ENDIF){WORD_END}")
     # (each statement starts with a letter: said after the gap too, so that where the run
     # ends the engine does not try every statement's pattern at every shorter gap)
     calls = (f"(?={NAME_START})(?:{GAP}(?={NAME_START})(?:{p['call']}|{if_block}))"
