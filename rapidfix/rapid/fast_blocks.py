@@ -137,31 +137,27 @@ class _Word:
 
 
 class Reader:
-    """Reads statement lists, compound statements and routines of one text.
-
-    `patterns` are the compiled fast terminals by name (FAST_CALLS, FAST_DECLS and the
-    heads); `split_calls` and `split_decls` turn a run's text into its nodes, `builder`
-    is the fast path's syntax builder (its callbacks make the compound nodes), `keywords`
-    the grammar's keywords (upper case), `assignment` reads an assignment no run takes
-    (its text, where it starts, its `:=` and its end) and `value` a value (its text and
-    where it stands), each None where it does not read.
+    """Reads statement lists, compound statements and routines of one text, with what
+    `lexer` (the BlockLexer) holds: the compiled fast terminals, the fast path's syntax
+    builder (its callbacks make the nodes), its splitters of runs of calls and of
+    declarations, the grammar's keywords (upper case), and its readers of an assignment
+    (its text, where it starts, its `:=` and its end) and of a value (its text and where
+    it stands) that no run takes, each None where it does not read.
     """
 
-    def __init__(self, text: str, patterns: dict[str, re.Pattern[str]], builder: Any,
-                 split_calls: Callable[[str, int], list], split_decls: Callable[[str, int], list],
-                 keywords: frozenset[str], assignment: Callable[[str, int, int, int], Any],
-                 value: Callable[[str, int], Any]) -> None:
+    def __init__(self, text: str, lexer: BlockLexer) -> None:
         self.text = text
-        self.keywords = keywords
-        self.assignment = assignment
-        self.value = value
+        self.keywords = lexer.keywords
+        self.assignment = lexer.assignment
+        self.value = lexer.value
+        patterns = lexer.patterns()
         self.calls = patterns["FAST_CALLS"].match
         self.decls = patterns["FAST_DECLS"].match
         self.heads = {kind: patterns[f"FAST_{kind.upper()}"].match for kind in _HEADS}
         self.heads["trap"] = _TRAP_HEAD.match
-        self.builder = builder
-        self.split_calls = split_calls
-        self.split_decls = split_decls
+        self.builder = lexer.builder
+        self.split_calls = lexer.split_calls
+        self.split_decls = lexer.split_decls
         # complete pieces of a failed read, by the position before their gap:
         # (their end, their nodes)
         self.done: dict[int, tuple[int, list]] = {}
@@ -525,9 +521,7 @@ class BlockLexer:
                         statements = self._opens(state, text, _GAP.match(text, pos).end())
                         if statements is not None:
                             if reader is None:
-                                reader = Reader(text, self.patterns(), self.builder,
-                                                self.split_calls, self.split_decls,
-                                                self.keywords, self.assignment, self.value)
+                                reader = Reader(text, self)
                             token = self._read(reader, statements, pos)
                     if token is not None:
                         _advance(line_ctr, text, token.start_pos)  # the gap, as Lark skips it

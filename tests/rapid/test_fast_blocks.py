@@ -87,7 +87,7 @@ def test_nested_blocks_in_routines_are_one_token_with_the_plain_tree():
 
 def test_blocks_in_a_routine_the_reader_leaves_are_one_token_from_the_first_block():
     """A routine with an ERROR handler naming error numbers is read by the parser; inside
-    it, the reader takes the statements from the first compound one on."""
+    it, the reader takes its statements from the first on."""
     text = NESTED.replace("ENDPROC", "ERROR (41, 42)\n  RETRY;\nENDPROC")
     assert tokens(text)[:6] == ["MODULE", "NAME", "FAST_PROC", "FAST_BLOCK", "ERROR", "OPEN_PAREN"]
     assert shape(parse_text(text)) == plain_tree(text)
