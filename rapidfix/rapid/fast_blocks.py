@@ -39,7 +39,7 @@ from typing import Any
 from lark import Token
 from lark.exceptions import UnexpectedCharacters
 
-from rapidfix.rapid.fast_expressions import GAP, NAME, STRING, WORD_END, WS
+from rapidfix.rapid.fast_expressions import GAP, NAME, STRING, WORD_END, WS, WS_CHARS
 from rapidfix.rapid.lexer_patterns import compiled_alone
 
 BLOCK = "FAST_BLOCK"
@@ -53,9 +53,9 @@ PATTERNS = ("FAST_CALLS", "FAST_DECLS", *(f"FAST_{kind.upper()}" for kind in _HE
 _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_stmt",
               "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
               "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
-              "connect_stmt", "name_ref", "label", "procedure_call", "arguments",
-              "required_argument", "error_handler", "undo_handler",
-              "backward_handler", "_fast_routine", "trap")
+              "connect_stmt", "name_ref", "label", "procedure_call", "late_call",
+              "arguments", "required_argument", "optional_argument", "conditional_argument",
+              "error_handler", "undo_handler", "backward_handler", "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
 #: those terminals see them)
 READ_AHEAD = True
@@ -78,7 +78,7 @@ _OPENED_BY = {letter: kind for kind in ("if", "while", "for", "test", "return")
 # The first letters of what the lexer has the reader try: a statement where the parser
 # may take one, a routine (or a declaration) where it may take a module item.
 _STATEMENT_OPENERS = frozenset(
-    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+    "%ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
     + "".join(map(chr, [*range(0xC0, 0xD7), *range(0xD8, 0xF7), *range(0xF8, 0x100)])))
 _ITEM_OPENERS = frozenset("PpFfLlTt")
 # The statements of a keyword and `;` (in error handlers mostly).
@@ -98,11 +98,22 @@ _CONNECT = re.compile(rf"(?i:CONNECT){WORD_END}{WS}*({_NAME}){WS}*(?i:(WITH)){WO
 _ASSIGNMENT = re.compile(
     rf"({_NAME})(?:{WS}*(?:\.{WS}*{_NAME}|\{{(?:[^{{}};\"]|{STRING})*\}}))*{WS}*(:=)"
     rf"(?:[^;\"]|{STRING})*;")
-# A procedure call of one value found loosely (the value is read exactly, or the call is
-# left to the parser): the name, whitespace, the value (group 2: not an optional
-# argument, a named one or none) up to the first `;` outside a string.
-_ONE_ARGUMENT = re.compile(
-    rf"({_NAME}){WS}+(?![:=\\,;])((?:[^;\"]|{STRING})+);")
+# A procedure call found loosely (its arguments are read exactly, or it is left to the
+# parser): the name, then whitespace or an optional argument's backslash, the arguments
+# (group 2) up to the first `;` outside a string.
+_CALL = re.compile(
+    rf"({_NAME})(?:{WS}+(?![:=,;])|{WS}*(?=\\))((?:[^;\"]|{STRING})+);")
+# A late-bound call, `%expr% arguments;`: the expression (group 1: up to the next `%`
+# outside a string) and the arguments (group 2, perhaps none) up to the `;`.
+_LATE_CALL = re.compile(rf"%((?:[^%;\"]|{STRING})+)%((?:[^;\"]|{STRING})*);")
+# What splits an argument list (a comma, a backslash) and what it steps over: strings, and
+# brackets of every kind (the commas and backslashes inside them are an argument's own).
+_ARGUMENT_MARKS = re.compile(rf"{STRING}|[,\\()\[\]{{}}]")
+_OPENERS, _CLOSERS = frozenset("([{"), frozenset(")]}")
+# An optional argument's name after its backslash.
+_OPTIONAL_NAME = re.compile(rf"{WS}*({_NAME}){WS}*")
+# A required argument given by name, `name := value`: the name.
+_NAMED = re.compile(rf"{WS}*({_NAME}){WS}*:=")
 # A label, `name:` (not `name:=`), its name in a group.
 _LABEL = re.compile(rf"({_NAME}){WS}*:(?!=)")
 # What follows ERROR when its handler names error numbers: left to the parser.
@@ -246,19 +257,123 @@ class Reader:
         return self.assignment(self.text, at, m.start(2), m.end())
 
     def _call(self, at: int) -> Any:
-        """The node of a procedure call of one value that no run of calls takes
-        (`WaitUntil stReact = ["Ready", "Ready"];`), or None."""
-        m = _ONE_ARGUMENT.match(self.text, at)
+        """The node of a procedure call at `at` that no run of calls takes (values the
+        runs' patterns leave out: `MoveL Offs(p, (i-1)*d, 0, h), v500, z10, t;`,
+        `WaitUntil a = [1,2] \\MaxTime:=3;`), or None."""
+        text = self.text
+        if text.startswith("%", at):
+            return self._late_call(at)
+        m = _CALL.match(text, at)
         if m is None or m.group(1).upper() in self.keywords:
             return None
+        arguments = self._arguments(*m.span(2))
+        if arguments is None:
+            return None
+        return self.builder.procedure_call(
+            _Word("NAME", text, *m.span(1)), arguments,
+            _Word("SEMI", text, m.end() - 1, m.end()))
+
+    def _late_call(self, at: int) -> Any:
+        """The node of a late-bound call `%expr% arguments;` at `at`, or None."""
         text, builder = self.text, self.builder
-        value = self.value(m.group(2).rstrip(" \t\f\v\r\n\x1a"), m.start(2))
+        m = _LATE_CALL.match(text, at)
+        if m is None:
+            return None
+        target = self._value(*m.span(1))
+        if target is None:
+            return None
+        semi = _Word("SEMI", text, m.end() - 1, m.end())
+        percent = _Word("PERCENT", text, at, at + 1)
+        if not m.group(2).strip(WS_CHARS):
+            return builder.late_call(percent, target, semi)
+        arguments = self._arguments(*m.span(2))
+        if arguments is None:
+            return None
+        return builder.late_call(percent, target, arguments, semi)
+
+    def _arguments(self, start: int, end: int) -> Any:
+        """The `arguments` node of text[start:end], read as the grammar reads them (the
+        first required or optional, each later one required after a comma or optional
+        after a backslash, perhaps with a comma before it), or None."""
+        text = self.text
+        cuts: list[int] = []  # each `,` and `\\` outside brackets and strings
+        depth = 0
+        for m in _ARGUMENT_MARKS.finditer(text, start, end):
+            char = text[m.start()]
+            if char in _OPENERS:
+                depth += 1
+            elif char in _CLOSERS:
+                depth -= 1
+                if depth < 0:
+                    return None
+            elif depth == 0 and char != '"':
+                cuts.append(m.start())
+        if depth:
+            return None
+        arguments = []
+        bounds = [start - 1, *cuts, end]  # piece k lies between bounds k and k + 1
+        for k in range(len(bounds) - 1):
+            mark = bounds[k] if k else None
+            first, last = bounds[k] + 1, bounds[k + 1]
+            if mark is not None and text[mark] == "\\":
+                argument = self._optional(mark, first, last)
+            elif not text[first:last].strip(WS_CHARS):
+                # nothing before a first optional argument, or a comma before one
+                if last < end and text[last] == "\\":
+                    continue
+                return None
+            else:
+                argument = self._required(first, last)
+            if argument is None:
+                return None
+            arguments.append(argument)
+        return self.builder.arguments(*arguments)
+
+    def _required(self, start: int, end: int) -> Any:
+        """A required argument (a value, or `name := value`) in text[start:end], or None."""
+        text, builder = self.text, self.builder
+        named = _NAMED.match(text, start, end)
+        if named is None:
+            value = self._value(start, end)
+            return None if value is None else builder.required_argument(value)
+        if named.group(1).upper() in self.keywords:
+            return None
+        value = self._value(named.end(), end)
         if value is None:
             return None
-        return builder.procedure_call(
-            _Word("NAME", text, *m.span(1)),
-            builder.arguments(builder.required_argument(value)),
-            _Word("SEMI", text, m.end() - 1, m.end()))
+        return builder.required_argument(_Word("NAME", text, *named.span(1)), value)
+
+    def _optional(self, slash: int, start: int, end: int) -> Any:
+        """The optional argument whose backslash is at `slash` (`\\name`, `\\name :=
+        value` or, conditional, `\\name ? name`), its text after the backslash
+        text[start:end], or None."""
+        text, builder = self.text, self.builder
+        m = _OPTIONAL_NAME.match(text, start, end)
+        if m is None or m.group(1).upper() in self.keywords:
+            return None
+        backslash = _Word("BACKSLASH", text, slash, slash + 1)
+        name = _Word("NAME", text, *m.span(1))
+        rest = m.end()
+        if rest == end:
+            return builder.optional_argument(backslash, name)
+        if text.startswith(":=", rest):
+            value = self._value(rest + 2, end)
+            return None if value is None else builder.optional_argument(backslash, name, value)
+        if text[rest] == "?":
+            param = _OPTIONAL_NAME.match(text, rest + 1, end)
+            if param is None or param.end() != end or param.group(1).upper() in self.keywords:
+                return None
+            return builder.conditional_argument(backslash, name,
+                                                _Word("NAME", text, *param.span(1)))
+        return None
+
+    def _value(self, start: int, end: int) -> Any:
+        """The expression node of text[start:end] (whitespace around it), or None."""
+        raw = self.text[start:end]
+        value = raw.strip(WS_CHARS)
+        if not value:
+            return None
+        return self.value(value, start + len(raw) - len(raw.lstrip(WS_CHARS)))
 
     def _label(self, at: int) -> Any:
         """The node of a label `name:` at `at` (its name no keyword), or None."""

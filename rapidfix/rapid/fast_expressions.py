@@ -39,6 +39,8 @@ from rapidfix.rapid.transform import number_value, numeric_aggregate_value, stri
 # The grammar's WHITESPACE, NUMBER and NUMERIC_AGGREGATE (checked against rapid.lark
 # by expression_patterns, whenever the fast terminals are made).
 WS = r"[ \t\f\v\r\n\x1a]"
+#: the characters of WS (to strip them)
+WS_CHARS = " \t\f\v\r\n\x1a"
 NUMBER = r"0[xX][0-9a-fA-F]+|0[bB][01]+|0[oO][0-7]+|(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _N = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
@@ -288,7 +290,7 @@ class NotRead(Exception):
 
 
 _SPACE = re.compile(f"{WS}*")
-_WS_CHARS = frozenset(" \t\f\v\r\n\x1a")
+_WS_CHARS = frozenset(WS_CHARS)
 _NUMBER = re.compile(NUMBER)
 _STRING = re.compile(STRING)
 _WORD = re.compile(NAME)

@@ -92,6 +92,7 @@ from rapidfix.rapid.fast_expressions import (  # (WS and GAP: also readback's)
     read_list,
 )
 from rapidfix.rapid.fast_expressions import VALUE_TEXT as _EXPRESSION_TEXT
+from rapidfix.rapid.fast_expressions import WS_CHARS as _WS_CHARS
 from rapidfix.rapid.grammar import diagnosis_parser, grammar_text, rapid_parser
 from rapidfix.rapid.lexer_patterns import share_large_patterns
 from rapidfix.rapid.transform import (
@@ -510,7 +511,6 @@ _INNER_PIECE = LazyPattern(
     rf"{WS}*(?:,{WS}*)?(?:(\\){WS}*({NAME})(?:{WS}*:={WS}*({_SIMPLE_TEXT}))?"
     rf"|({_CALL_TEXT}|{_SIMPLE_TEXT})|(\)))"
 )
-_WS_CHARS = " \t\f\v\r\n\x1a"
 
 
 def _call_node(text: str, start: int) -> s.Call:

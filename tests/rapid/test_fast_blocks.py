@@ -131,8 +131,8 @@ def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
 
 
 @pytest.mark.parametrize("piece", [
-    '%"Vis" + "it"% p1;', "CONNECT a{1} WITH tr;", "RAISE 5;", "ENDFOR:",
-    "Foo x:=1, 2;", "<SMT>",
+    '%"Vis" + "it"% <ARG>;', "CONNECT a{1} WITH tr;", "RAISE 5;", "ENDFOR:",
+    "Foo x:=1, <ARG>;", "<SMT>",
 ])
 def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_read_twice(
         monkeypatch, piece):
@@ -195,6 +195,32 @@ def test_statements_no_run_takes_are_read_in_the_block(statement):
 
 
 @pytest.mark.parametrize("statement", [
+    "MoveL \\Conc, Offs(p1, (i-1)*2, 0, 0), v100 \\T:=2, z10, tool0 \\WObj:=w;",
+    "Foo \\A \\B:=(1+2), \\C;", "Foo\\A?B, (c);", "Foo x:=(1), 2;",
+    'TPWrite "a,b\\\\c;" + s \\Num:=(n);', "Foo \\Bar:=Baz(\\A:=1, 2), (3);",
+    '%"Vis" + "it"% p1, (2);', "%s%;", "% s %\\A, (1);", "Foo a{(1)},\n  [1,(2)];",
+])
+def test_calls_of_several_values_are_read_in_the_block(statement):
+    """A call whose arguments the runs' patterns leave out (parentheses, calls inside
+    them, optional, conditional and named arguments, a late-bound routine): its list split
+    at the commas and backslashes outside brackets and strings, each piece read exactly."""
+    text = routine("IF a THEN", f"  {statement}", f"  {MOVE}", "ENDIF")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert_parses_as_plain(text)
+
+
+@pytest.mark.parametrize("statement", [
+    "Foo 1,, (2);", "Foo (1), ;", "Foo (1) \\;", "Foo (1) (2);", "Foo \\A:=;",
+    "Foo \\A ? ;", "Foo \\IF, (1);", "Foo (1\\A);", "Foo (1)), 2;", "Foo [1, 2, (3);",
+    "%(1)% ;", "%a%% b;", "Foo <ARG>, (1);", "Foo \\A?B:=1, (2);",
+])
+def test_calls_that_do_not_read_are_the_parsers(statement):
+    """Argument lists the grammar refuses, or reads otherwise: the same tree or the same
+    error as the plain grammar's."""
+    assert_parses_as_plain(routine("IF a THEN", f"  {statement}", "ENDIF"))
+
+
+@pytest.mark.parametrize("statement", [
     "x := path{\u0661};", "Foo path{\u0661};", "x := 1 2;", "Foo a := 1;", "Foo a, b := 2;",
 ])
 def test_statements_found_loosely_are_the_grammars_or_the_parsers(statement):
@@ -225,6 +251,11 @@ SIMPLE = [
     "Foo (a).b;", "Foo a := 1;", "Foo a b;", "Foo NOT b;", "Foo AND;", "Foo -(1);",
     "WaitUntil a = [1,(2)] \\MaxTime:=3;", "Foo a,\n b;", "x := ;", "x{a{1}} := (1);",
     "Foo\n  (1)\n  + 2;", "Foo DIV;", "Foo ENDIF;", "x := a\n OR b;", "x := 1 2;",
+    # calls of several values that no run takes
+    "MoveL \\Conc, Offs(p1,(i-1)*2,0,0), v100 \\T:=2, z10, tool0 \\WObj:=w;",
+    "Foo \\A \\B:=(1+2), \\C;", "Foo \\A?B, (c);", "Foo x:=(1), 2;", "Foo 1,, (2);",
+    'TPWrite "a,b\\\\c" + s \\Num:=(n);', '%"Vis" + "it"% p1, (2);', "%s%;", "Foo (1) 2;",
+    "Foo \\Bar:=Baz(\\A:=1, 2), (3);", "Foo (1), ;", "Foo \\IF, (1);", "%a%% b;",
 ]
 # pieces that are wrong wherever the generator puts them (or nearly)
 WRONG = ["endif", "ENDIF;", "CASE 1:", "ELSE", "RAISE"]
@@ -305,3 +336,47 @@ def program_text(draw: st.DrawFn) -> str:
 def test_random_blocks_and_routines_parse_as_with_the_plain_grammar(text):
     assert_parses_as_plain(text)
 
+
+
+# ------------------------------------------------------------ random argument lists
+VALUES = ["(1)", "a", "(i-1)*2", "Offs(p1,(i-1)*d,0,h)", '"a,b\\\\c;"', '"q""\\\\"', "[1,(2)]",
+          "a{(1)}", "Baz(\\A:=1, 2)", "CRobT(\\Tool:=t \\WObj:=w)", "NOT b", "-(1)", "x = [1,2]",
+          "<ARG>", "", "1 2", "(1", "1)", "IF"]
+NAMES = ["A", "Conc", "WObj", "IF", "a1", "\u00c4r"]
+
+
+@st.composite
+def argument(draw: st.DrawFn, first: bool) -> str:
+    """One argument with what may stand before it (a comma; for an optional one a
+    backslash, a comma and a backslash, or nothing but whitespace), right or wrong."""
+    ws = st.sampled_from(["", " ", "\n  ", "\t"])
+    name, value = draw(st.sampled_from(NAMES)), draw(st.sampled_from(VALUES))
+    kind = draw(st.sampled_from(["value", "value", "named", "optional", "switch",
+                                 "conditional"]))
+    if kind == "value":
+        text = value
+    elif kind == "named":
+        text = f"{name}{draw(ws)}:={draw(ws)}{value}"
+    else:
+        text = "\\" + draw(ws) + name + {
+            "optional": f"{draw(ws)}:={draw(ws)}{value}", "switch": "",
+            "conditional": f"{draw(ws)}?{draw(ws)}{draw(st.sampled_from(NAMES))}"}[kind]
+    before = "" if first else draw(st.sampled_from([",", ",", ", ", " ", ",\n  "]))
+    return before + draw(ws) + text
+
+
+@st.composite
+def call_text(draw: st.DrawFn) -> str:
+    count = draw(st.integers(0, 5))
+    arguments = "".join(draw(argument(k == 0)) for k in range(count))
+    head = draw(st.sampled_from(["Foo ", "MoveL ", "Foo", "%s% ", '%"a" + b%', "IF "]))
+    return f"{head}{arguments};"
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(call_text(), min_size=1, max_size=4))
+def test_random_argument_lists_parse_as_with_the_plain_grammar(calls):
+    """Calls the reader finds loosely and splits at the commas and backslashes outside
+    brackets and strings: the same tree as the plain grammar's, or the same error."""
+    assert_parses_as_plain(routine("IF a THEN", *(f"  {c}" for c in calls), f"  {MOVE}",
+                                   "ENDIF"))
