@@ -11,14 +11,16 @@ may take a statement, or a module item and the text opens a routine, the reader 
 as far as it can read exactly, with the fast terminals' own patterns (runs of calls
 and of declarations, compound heads) and the keywords that close each construct, and
 builds the syntax nodes the grammar's rules build (through the fast path's own
-callbacks). An assignment or a call of one value that no run takes (parentheses in an
-aggregate, calls in a sum) is found loosely and its pieces read by the expression
-reader, which builds exactly what the grammar builds or gives up. What it read becomes
-one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
+callbacks). What no run or head takes (an assignment, a call, a late-bound call, a
+compact IF, RAISE or RETURN of a value; an IF, ELSEIF or WHILE head) is found loosely:
+split where the grammar must split it (an argument list at the commas and backslashes
+outside brackets and strings, a head at its THEN or DO), its pieces read by the
+expression reader, which builds exactly what the grammar builds or gives up. What it
+read becomes one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
 (`_fast_block`, `_fast_routines`) splice them where the parser stands. A piece it
-cannot read (a late call, an ERROR handler with numbers, a call of several values no
-run takes, a syntax error) ends the token before the outermost construct that holds
-it, and Lark reads on from there as before.
+cannot read (an ERROR handler with numbers, a placeholder, a syntax error) ends the
+token before the outermost construct that holds it, and Lark reads on from there as
+before.
 
 Inside a construct that fails, what was read complete (each run of calls or of a
 routine's declarations, each statement) is kept by position, and the lexer hands it
@@ -39,7 +41,15 @@ from typing import Any
 from lark import Token
 from lark.exceptions import UnexpectedCharacters
 
-from rapidfix.rapid.fast_expressions import GAP, NAME, STRING, WORD_END, WS, WS_CHARS
+from rapidfix.rapid.fast_expressions import (
+    GAP,
+    LATIN1_LETTERS,
+    NAME,
+    STRING,
+    WORD_END,
+    WS,
+    WS_CHARS,
+)
 from rapidfix.rapid.lexer_patterns import compiled_alone
 
 BLOCK = "FAST_BLOCK"
@@ -54,6 +64,7 @@ _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_s
               "fast_for_stmt", "fast_test_stmt", "fast_case_clause", "default_clause",
               "fast_return_stmt", "retry_stmt", "trynext_stmt", "exit_stmt", "raise_stmt",
               "connect_stmt", "name_ref", "label", "procedure_call", "late_call",
+              "if_stmt", "elseif_clause", "while_stmt", "compact_if", "return_stmt",
               "arguments", "required_argument", "optional_argument", "conditional_argument",
               "error_handler", "undo_handler", "backward_handler", "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
@@ -99,10 +110,12 @@ _ASSIGNMENT = re.compile(
     rf"({_NAME})(?:{WS}*(?:\.{WS}*{_NAME}|\{{(?:[^{{}};\"]|{STRING})*\}}))*{WS}*(:=)"
     rf"(?:[^;\"]|{STRING})*;")
 # A procedure call found loosely (its arguments are read exactly, or it is left to the
-# parser): the name, then whitespace or an optional argument's backslash, the arguments
-# (group 2) up to the first `;` outside a string.
+# parser): the name, then whitespace, or an optional argument's backslash, a bracket or
+# a string, the arguments (group 2) up to the first `;` outside a string.
 _CALL = re.compile(
-    rf"({_NAME})(?:{WS}+(?![:=,;])|{WS}*(?=\\))((?:[^;\"]|{STRING})+);")
+    rf"({_NAME})(?:{WS}+(?![:=,;])|{WS}*(?=[\\(\[\"]))((?:[^;\"]|{STRING})+);")
+# A call without arguments (`Stop;`, which runs take, but not as a compact IF's own).
+_BARE_CALL = re.compile(rf"({_NAME}){WS}*;")
 # A late-bound call, `%expr% arguments;`: the expression (group 1: up to the next `%`
 # outside a string) and the arguments (group 2, perhaps none) up to the `;`.
 _LATE_CALL = re.compile(rf"%((?:[^%;\"]|{STRING})+)%((?:[^;\"]|{STRING})*);")
@@ -114,6 +127,29 @@ _OPENERS, _CLOSERS = frozenset("([{"), frozenset(")]}")
 _OPTIONAL_NAME = re.compile(rf"{WS}*({_NAME}){WS}*")
 # A required argument given by name, `name := value`: the name.
 _NAMED = re.compile(rf"{WS}*({_NAME}){WS}*:=")
+# A head no fast terminal takes (its condition one the patterns leave out): the keyword
+# (group 1), the condition (group 2) and the word after it (group 3: THEN or DO, the
+# first outside a string; neither stands in an expression).
+_WORD_START = rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])"
+_LOOSE_HEADS = {
+    kind: re.compile(rf"(?i:({kind})){WORD_END}((?:[^;\"]|{STRING})*?){_WORD_START}"
+                     rf"(?i:({after})){WORD_END}")
+    for kind, after in (("if", "THEN"), ("elseif", "THEN"), ("while", "DO"))}
+# A compact IF's condition: where a name (or a late call's `%`) follows the end of an
+# operand, at the top level, the condition has ended (no name continues an expression
+# but the word operators). Group 1: a word's last character, with whitespace and a name
+# after it; a string or a closing bracket may have a name straight after it
+# (_STATEMENT_AHEAD). Strings and brackets are stepped over.
+_COMPACT_IF = re.compile(rf"(?i:IF){WORD_END}{WS}*")
+_CONDITION_MARKS = re.compile(
+    rf"{STRING}|[()\[\]{{}}]|([A-Za-z0-9_{LATIN1_LETTERS}]){WS}+(?=[A-Za-z{LATIN1_LETTERS}%])"
+    rf"|;")
+_STATEMENT_AHEAD = re.compile(rf"{WS}*(?=[A-Za-z{LATIN1_LETTERS}%])")
+_WORD_OPERATORS = frozenset(("AND", "OR", "XOR", "NOT", "DIV", "MOD"))
+_OPERATOR_WORD = re.compile(rf"(?i:AND|OR|XOR|NOT|DIV|MOD){WORD_END}")
+_WORD_CHAR = re.compile(rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
+# RAISE or RETURN of a value no fast terminal takes: the keyword, the value (group 2).
+_VALUED = re.compile(rf"(?i:(RAISE|RETURN)){WORD_END}((?:[^;\"]|{STRING})+);")
 # A label, `name:` (not `name:=`), its name in a group.
 _LABEL = re.compile(rf"({_NAME}){WS}*:(?!=)")
 # What follows ERROR when its handler names error numbers: left to the parser.
@@ -145,6 +181,22 @@ class _Word:
 
     def __str__(self) -> str:
         return self.text[self.start_pos:self.end_pos]
+
+
+class _LooseHead:
+    """A head found loosely, its condition read exactly: what the constructs read of a
+    head's match (where it starts and ends), and the plain grammar's pieces of it."""
+
+    __slots__ = ("closing", "cond", "keyword")
+
+    def __init__(self, keyword: _Word, cond: Any, closing: _Word) -> None:
+        self.keyword, self.cond, self.closing = keyword, cond, closing
+
+    def start(self) -> int:
+        return self.keyword.start_pos
+
+    def end(self) -> int:
+        return self.closing.end_pos
 
 
 class Reader:
@@ -213,6 +265,8 @@ class Reader:
                     out += nodes
                     pos = m.end()
                     continue
+                if head is None and kind in _LOOSE_HEADS:
+                    head = self._loose_head(kind, at)
             if head is not None:
                 if kind == "return":
                     node = self.builder.fast_return_stmt(
@@ -229,23 +283,35 @@ class Reader:
                 out.append(node)
                 pos = node.end
                 continue
-            plain = _KEYWORD_STATEMENT.match(text, at)
-            if plain is None:
-                node = (self._assignment(at) or self._connect(at) or self._label(at)
-                        or self._call(at))
-                if node is None:
-                    return out, pos, None, at, at
-                done[pos] = (node.end, [node])
-                out.append(node)
-                pos = node.end
-                continue
-            word = plain.group(1).upper()
-            node = getattr(self.builder, f"{word.lower()}_stmt")(
-                _Word(word, text, at, plain.end(1)), _Word("SEMI", text, plain.end() - 1,
-                                                           plain.end()))
+            node = (self._keyword_statement(at) or self._assignment(at) or self._connect(at)
+                    or self._label(at) or self._call(at) or self._compact_if(at)
+                    or self._valued(at))
+            if node is None:
+                return out, pos, None, at, at
             done[pos] = (node.end, [node])
             out.append(node)
             pos = node.end
+
+    def _keyword_statement(self, at: int) -> Any:
+        """The node of RETRY, TRYNEXT, EXIT or RAISE and `;` at `at`, or None."""
+        text = self.text
+        m = _KEYWORD_STATEMENT.match(text, at)
+        if m is None:
+            return None
+        word = m.group(1).upper()
+        return getattr(self.builder, f"{word.lower()}_stmt")(
+            _Word(word, text, at, m.end(1)), _Word("SEMI", text, m.end() - 1, m.end()))
+
+    def _simple(self, at: int) -> Any:
+        """The node of a compact IF's statement at `at`, or None."""
+        node = (self._keyword_statement(at) or self._assignment(at) or self._call(at)
+                or self._valued(at) or self._connect(at))
+        if node is None:
+            head = self.heads["return"](self.text, at)
+            if head is not None:
+                node = self.builder.fast_return_stmt(
+                    _Word("FAST_RETURN", self.text, at, head.end()))
+        return node
 
     def _assignment(self, at: int) -> Any:
         """The node of an assignment at `at` that no run of calls takes (its value an
@@ -256,6 +322,81 @@ class Reader:
             return None
         return self.assignment(self.text, at, m.start(2), m.end())
 
+    def _loose_head(self, kind: str, at: int) -> _LooseHead | None:
+        """The head of an IF, ELSEIF or WHILE (`kind`) at `at` whose condition no fast
+        terminal takes, up to its THEN or DO, or None."""
+        text = self.text
+        m = _LOOSE_HEADS[kind].match(text, at)
+        if m is None:
+            return None
+        cond = self._value(*m.span(2))
+        if cond is None:
+            return None
+        return _LooseHead(_Word(kind.upper(), text, *m.span(1)), cond,
+                          _Word(m.group(3).upper(), text, *m.span(3)))
+
+    def _compact_if(self, at: int) -> Any:
+        """The node of a compact IF at `at` (`IF (a = 1) OR b x := f(2);`) whose statement
+        is an assignment or a call no run takes, or None."""
+        text = self.text
+        m = _COMPACT_IF.match(text, at)
+        if m is None:
+            return None
+        start, depth = m.end(), 0
+        for mark in _CONDITION_MARKS.finditer(text, start):
+            if mark.group(1) is not None:  # a word's end, whitespace and a name
+                if depth:
+                    continue
+                end, statement_at = mark.start() + 1, mark.end()
+            else:
+                char = text[mark.start()]
+                if char in _OPENERS:
+                    depth += 1
+                    continue
+                if char == ";":
+                    return None
+                if char in _CLOSERS:
+                    depth -= 1
+                    if depth < 0:
+                        return None
+                ahead = _STATEMENT_AHEAD.match(text, mark.end())
+                if depth or ahead is None:  # (after a closing bracket or a string)
+                    continue
+                end, statement_at = mark.end(), ahead.end()
+            if self._operator_around(start, end, statement_at):
+                continue
+            cond = self._value(start, end)
+            statement = self._simple(statement_at)
+            if cond is None or statement is None:
+                return None
+            return self.builder.compact_if(_Word("IF", text, at, at + 2), cond, statement)
+        return None
+
+    def _operator_around(self, start: int, end: int, after: int) -> bool:
+        """Whether a word operator ends the text from `start` (a condition's start) to
+        `end` or starts at `after` (`a AND b`, `NOT b`): then the condition goes on."""
+        text = self.text
+        if _OPERATOR_WORD.match(text, after) is not None:
+            return True
+        begin = end
+        while begin > start and _WORD_CHAR.match(text, begin - 1):
+            begin -= 1
+        return text[begin:end].upper() in _WORD_OPERATORS
+
+    def _valued(self, at: int) -> Any:
+        """The node of RAISE or RETURN of a value no fast terminal takes, or None."""
+        text = self.text
+        m = _VALUED.match(text, at)
+        if m is None:
+            return None
+        value = self._value(*m.span(2))
+        if value is None:
+            return None
+        word = m.group(1).upper()
+        make = self.builder.raise_stmt if word == "RAISE" else self.builder.return_stmt
+        return make(_Word(word, text, *m.span(1)), value,
+                    _Word("SEMI", text, m.end() - 1, m.end()))
+
     def _call(self, at: int) -> Any:
         """The node of a procedure call at `at` that no run of calls takes (values the
         runs' patterns leave out: `MoveL Offs(p, (i-1)*d, 0, h), v500, z10, t;`,
@@ -264,7 +405,13 @@ class Reader:
         if text.startswith("%", at):
             return self._late_call(at)
         m = _CALL.match(text, at)
-        if m is None or m.group(1).upper() in self.keywords:
+        if m is None:
+            bare = _BARE_CALL.match(text, at)
+            if bare is None or bare.group(1).upper() in self.keywords:
+                return None
+            return self.builder.procedure_call(_Word("NAME", text, *bare.span(1)),
+                                               _Word("SEMI", text, bare.end() - 1, bare.end()))
+        if m.group(1).upper() in self.keywords:
             return None
         arguments = self._arguments(*m.span(2))
         if arguments is None:
@@ -416,10 +563,15 @@ class Reader:
             else:
                 closing = "ENDWHILE" if kind == "while" else "ENDFOR"
                 body, _, at, end = self._body(head.end(), closing)
-                make = self.builder.fast_while_stmt if kind == "while" else \
-                    self.builder.fast_for_stmt
-                node = make(_Word(f"FAST_{kind.upper()}", self.text, head.start(), head.end()),
-                            *body, _Word(closing, self.text, at, end))
+                last = _Word(closing, self.text, at, end)
+                if type(head) is _LooseHead:
+                    node = self.builder.while_stmt(head.keyword, head.cond, head.closing,
+                                                   *body, last)
+                else:
+                    make = self.builder.fast_while_stmt if kind == "while" else \
+                        self.builder.fast_for_stmt
+                    node = make(_Word(f"FAST_{kind.upper()}", self.text, head.start(),
+                                      head.end()), *body, last)
         finally:
             self.depth -= 1
         self._forget_inside(mark)
@@ -442,8 +594,11 @@ class Reader:
             else_token = _Word("ELSE", text, at, end)
             body, word, at, end = self._body(end, "ENDIF")
             rest.append(builder.else_clause(else_token, *body))
+        endif = _Word("ENDIF", text, at, end)
+        if type(head) is _LooseHead:
+            return builder.if_stmt(head.keyword, head.cond, head.closing, *rest, endif)
         return builder.fast_if_stmt(_Word("FAST_IF", text, head.start(), head.end()), *rest,
-                                    _Word("ENDIF", text, at, end))
+                                    endif)
 
     def _clauses(self, kind: str, word: str, at: int, end: int, *after: str
                  ) -> tuple[list, str, int, int]:
@@ -457,10 +612,16 @@ class Reader:
         clauses: list = []
         while word == keyword:
             clause = self.heads[kind](text, at)
+            if clause is None and kind == "elseif":
+                clause = self._loose_head(kind, at)
             if clause is None:
                 raise _Unread(at)
             body, word, next_at, end = self._body(clause.end(), keyword, *after)
-            clauses.append(make(_Word(f"FAST_{keyword}", text, at, clause.end()), *body))
+            if type(clause) is _LooseHead:
+                clauses.append(self.builder.elseif_clause(clause.keyword, clause.cond,
+                                                          clause.closing, *body))
+            else:
+                clauses.append(make(_Word(f"FAST_{keyword}", text, at, clause.end()), *body))
             at = next_at
         return clauses, word, at, end
 

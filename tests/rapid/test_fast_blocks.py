@@ -131,7 +131,7 @@ def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
 
 
 @pytest.mark.parametrize("piece", [
-    '%"Vis" + "it"% <ARG>;', "CONNECT a{1} WITH tr;", "RAISE 5;", "ENDFOR:",
+    '%"Vis" + "it"% <ARG>;', "CONNECT a{1} WITH tr;", "RAISE <EXP>;", "ENDFOR:",
     "Foo x:=1, <ARG>;", "<SMT>",
 ])
 def test_a_piece_no_fast_terminal_takes_is_left_to_the_parser_and_nothing_is_read_twice(
@@ -210,6 +210,27 @@ def test_calls_of_several_values_are_read_in_the_block(statement):
 
 
 @pytest.mark.parametrize("statement", [
+    "IF (CCW=FALSE) p.trans:=[nX+(-1*X),nY+(Y),nZ];", "IF (NOT a{9}.b=[0,0]) Foo M(\\R:=j{9}),v;",
+    'IF a AND b OR NOT c x := [(1)];', "if f(x) MOD 2 = 1 %\"a\"% (1);", "IF s=\"x y\" x:=(1);",
+    "IF (a) THEN\n    x := (1);\n  ELSEIF (b) OR c THEN\n    Stop;\n  ENDIF",
+    "WHILE (n < 3) AND f(\"DO\") DO\n    Incr n;\n  ENDWHILE", "RAISE ERR_MY_ERROR;",
+    "RETURN (a + 1) * 2;", "WaitUntil(stCommand=\"\");", 'TPWrite"a";',
+    "IF (a AND s<>TC_OK)\n    RAISE status;", 'IF s=["E","E"]rHome;', "IF (b) RETURN;",
+    "IF d=CDate() RETURN ;", "IF (a) EXIT;", 'IF s="x"Foo (1);', "IF a{(1)} RAISE;",
+])
+def test_heads_and_compact_ifs_no_fast_terminal_takes_are_read_in_the_block(statement):
+    """IF, ELSEIF and WHILE heads up to their THEN or DO, a compact IF's condition up to
+    where a name follows an operand, RAISE and RETURN of a value, a call whose name a
+    bracket or a string follows: found loosely, their pieces read exactly."""
+    text = routine("IF a THEN", f"  {statement}", f"  {MOVE}", "ENDIF")
+    assert tokens(text) == ["MODULE", "NAME", "FAST_ROUTINES", "ENDMODULE"]
+    assert_parses_as_plain(text)
+
+
+@pytest.mark.parametrize("statement", [
+    "IF a AND b;", "IF a b c;", "IF (a Foo;", "IF a) Foo;", "IF a GOTO l;", "IF a b := ;",
+    "IF THEN Foo; ENDIF", "IF a THEN Foo; ELSEIF THEN Stop; ENDIF", "WHILE DO ENDWHILE",
+    "WHILE a Foo; ENDWHILE", "RAISE 1 2;", "RETURN <EXP>;", "IF a NOT b;", "IF a - b x:=1;",
     "Foo 1,, (2);", "Foo (1), ;", "Foo (1) \\;", "Foo (1) (2);", "Foo \\A:=;",
     "Foo \\A ? ;", "Foo \\IF, (1);", "Foo (1\\A);", "Foo (1)), 2;", "Foo [1, 2, (3);",
     "%(1)% ;", "%a%% b;", "Foo <ARG>, (1);", "Foo \\A?B:=1, (2);",
@@ -256,10 +277,18 @@ SIMPLE = [
     "Foo \\A \\B:=(1+2), \\C;", "Foo \\A?B, (c);", "Foo x:=(1), 2;", "Foo 1,, (2);",
     'TPWrite "a,b\\\\c" + s \\Num:=(n);', '%"Vis" + "it"% p1, (2);', "%s%;", "Foo (1) 2;",
     "Foo \\Bar:=Baz(\\A:=1, 2), (3);", "Foo (1), ;", "Foo \\IF, (1);", "%a%% b;",
+    # compact IFs, RAISE and RETURN of values, heads no fast terminal takes
+    "IF (a=1) x:=[(1)];", "IF NOT (a) AND b Foo (1), 2;", "IF a b;", "IF a GOTO lbl;",
+    "IF a MOD 2 %s% (1);", "RAISE ERR_X;", "RETURN (a);", "IF (a) Foo; ENDIF",
+    "IF (a) RAISE x;", 'IF s=["E"]rHome;', "IF (b) RETURN;", "IF (a) EXIT;", "IF (a)\nRETRY;",
+    'IF s="x"Foo;', "IF (a) RETURN (1) 2;", "IF (a)AND b Foo;", "IF (a) CONNECT i WITH t;",
+    "IF (a) THEN Stop; ELSEIF (b) THEN x:=1; ENDIF", "WHILE (a) DO Stop; ENDWHILE",
 ]
 # pieces that are wrong wherever the generator puts them (or nearly)
 WRONG = ["endif", "ENDIF;", "CASE 1:", "ELSE", "RAISE"]
-CONDITIONS = ["a", "n > 2 AND NOT b", "f(x) = 1", "s = \"THEN\"", "a\n  OR b"]
+CONDITIONS = ["a", "n > 2 AND NOT b", "f(x) = 1", "s = \"THEN\"", "a\n  OR b",
+              # conditions no head's pattern takes
+              "(a) OR b", "(NOT b) AND (n > 1)", "\"DO\" = s", "a{(1)}", "(a"]
 
 
 @st.composite
