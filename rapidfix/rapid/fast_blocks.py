@@ -18,9 +18,8 @@ outside brackets and strings, a head at its THEN or DO), its pieces read by the
 expression reader, which builds exactly what the grammar builds or gives up. What it
 read becomes one token, FAST_BLOCK or FAST_ROUTINES, holding those nodes; inlined rules
 (`_fast_block`, `_fast_routines`) splice them where the parser stands. A piece it
-cannot read (an ERROR handler with numbers, a placeholder, a syntax error) ends the
-token before the outermost construct that holds it, and Lark reads on from there as
-before.
+cannot read (a placeholder, a record type, a syntax error) ends the token before the
+outermost construct that holds it, and Lark reads on from there as before.
 
 Inside a construct that fails, what was read complete (each run of calls or of a
 routine's declarations, each statement) is kept by position, and the lexer hands it
@@ -66,7 +65,8 @@ _CALLBACKS = ("fast_if_stmt", "fast_elseif_clause", "else_clause", "fast_while_s
               "connect_stmt", "name_ref", "label", "procedure_call", "late_call",
               "if_stmt", "elseif_clause", "while_stmt", "compact_if", "return_stmt",
               "arguments", "required_argument", "optional_argument", "conditional_argument",
-              "error_handler", "undo_handler", "backward_handler", "_fast_routine", "trap")
+              "error_handler", "error_numbers", "undo_handler", "backward_handler",
+              "_fast_routine", "trap")
 #: whether the lexer has the reader read ahead (off: the fast terminals alone, as tests of
 #: those terminals see them)
 READ_AHEAD = True
@@ -123,6 +123,8 @@ _LATE_CALL = re.compile(rf"%((?:[^%;\"]|{STRING})+)%((?:[^;\"]|{STRING})*);")
 # brackets of every kind (the commas and backslashes inside them are an argument's own).
 _ARGUMENT_MARKS = re.compile(rf"{STRING}|[,\\()\[\]{{}}]")
 _OPENERS, _CLOSERS = frozenset("([{"), frozenset(")]}")
+# The same, and the `;` no list of values holds outside a string.
+_LIST_MARKS = re.compile(rf"{STRING}|[,\\()\[\]{{}};]")
 # An optional argument's name after its backslash.
 _OPTIONAL_NAME = re.compile(rf"{WS}*({_NAME}){WS}*")
 # A required argument given by name, `name := value`: the name.
@@ -152,7 +154,7 @@ _WORD_CHAR = re.compile(rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
 _VALUED = re.compile(rf"(?i:(RAISE|RETURN)){WORD_END}((?:[^;\"]|{STRING})+);")
 # A label, `name:` (not `name:=`), its name in a group.
 _LABEL = re.compile(rf"({_NAME}){WS}*:(?!=)")
-# What follows ERROR when its handler names error numbers: left to the parser.
+# What follows ERROR when its handler names error numbers.
 _NUMBERS = re.compile(rf"{WS}*\(")
 
 
@@ -673,14 +675,20 @@ class Reader:
                 continue
             if word == closing:
                 break
-            if word not in ("ERROR", "UNDO", "BACKWARD") or (
-                    word == "ERROR" and _NUMBERS.match(text, end)):
+            if word not in ("ERROR", "UNDO", "BACKWARD"):
                 raise _Unread(at)
             handler_token = _Word(word, text, at, end)
+            numbers: list = []
+            opened = _NUMBERS.match(text, end) if word == "ERROR" else None
+            if opened is not None:
+                listed = self._error_numbers(opened.end() - 1)
+                if listed is None:
+                    raise _Unread(at)
+                numbers, end = [listed[0]], listed[1]
             body, word, at, end = self._handler_body(end, closing)
             handler = {"ERROR": self.builder.error_handler, "UNDO": self.builder.undo_handler,
                        "BACKWARD": self.builder.backward_handler}[handler_token.type]
-            items.append(handler(handler_token, *body))
+            items.append(handler(handler_token, *numbers, *body))
             handlers = True
             if word == closing:
                 break
@@ -696,6 +704,31 @@ class Reader:
         return self.builder._fast_routine(
             kind.upper(), _Word(f"FAST_{kind.upper()}", text, head.start(), head.end()),
             (*items, end_word))
+
+    def _error_numbers(self, opened: int) -> tuple[Any, int] | None:
+        """The error numbers of an ERROR handler, `(expr, ...)` with its `(` at `opened`:
+        their node and where the `)` ends, or None."""
+        text, values = self.text, []
+        depth, piece = 0, opened + 1
+        for mark in _LIST_MARKS.finditer(text, opened):
+            char = text[mark.start()]
+            if char in _OPENERS:
+                depth += 1
+            elif char in _CLOSERS:
+                depth -= 1
+                if depth == 0:
+                    if char != ")":
+                        return None
+                    values.append(self._value(piece, mark.start()))
+                    if None in values:
+                        return None
+                    return self.builder.error_numbers(*values), mark.end()
+            elif char == "," and depth == 1:
+                values.append(self._value(piece, mark.start()))
+                piece = mark.end()
+            elif char in ";\\" and depth:
+                return None
+        return None
 
     def _handler_body(self, pos: int, closing: str) -> tuple[list, str, int, int]:
         return self._body(pos, "ERROR", "UNDO", "BACKWARD", closing)

@@ -103,7 +103,8 @@ ODD_SHAPES = ("many_procs", "frames", "stacked", "deep", "expressions", "modules
               "reltool", "lower", "upper", "exponent", "data_last", "elements",
               "routine_targets", "nested_calls", "spaced_brackets", "one_routine",
               "inline_data", "long_names", "deep_calls", "compact_ifs", "paren_calls", "grids",
-              "record_tables", "multimove", "one_line", "labels", "computed")
+              "record_tables", "multimove", "one_line", "labels", "computed", "pallet",
+              "callers", "guards")
 
 
 def _decls(n: int, prefix: str = "p") -> list[str]:
@@ -267,6 +268,66 @@ def _computed(n: int) -> list[str]:
                 else "    i:=Trunc((nX-nY)*1000);",
                 f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"]
     return [*out, "  ENDPROC", "ENDMODULE"]
+
+
+def _pallet(n: int) -> list[str]:
+    """Palletising: each layer above its first point, then rows and columns in FOR loops,
+    each place an Offs of parenthesised sums of the loop variables (left as written: the
+    loop sets them at run time), then the layer's other points by name."""
+    out = [*_head("Pallet"), "  VAR num nPitch:=0.5;", "  VAR num nH:=10;", *_decls(n)]
+    for first in range(0, n, 20):
+        out += [f"  PROC Layer{first // 20}()",
+                f"    MoveJ Offs(p{first},0,0,50),v1000,z50,tMill\\WObj:=wPlate;",
+                "    FOR i FROM 1 TO 3 DO", "      FOR j FROM 1 TO 3 DO",
+                f"        MoveL Offs(p{first}, (i-1)*nPitch, (j-1)*nPitch, nH), v500, z10, "
+                "tMill\\WObj:=wPlate;",
+                f"        MoveL Offs(p{first}, (i-1)*nPitch, (j-1)*nPitch, 0), v100, fine, "
+                "tMill\\WObj:=wPlate;",
+                "        WaitTime 0.1;", "      ENDFOR", "    ENDFOR",
+                *(f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"
+                  for k in range(first + 1, min(n, first + 20))),
+                "  ENDPROC"]
+    return [*out, "ENDMODULE"]
+
+
+def _callers(n: int) -> list[str]:
+    """A cell that calls a station's routine by a name built at run time after every
+    other move (`%"Station" + NumToStr(n, 0)%;`, `CallByVar`), and a routine of its own
+    with a target and optional arguments (`Place p4 \\Speed:=v200, 20;`)."""
+    out = [*_head("Callers"), "  VAR num nStation:=1;", *_decls(n),
+           "  PROC Place(robtarget pT \\speeddata Speed, num nLift)",
+           "    MoveL Offs(pT,0,0,nLift),v500,z10,tMill\\WObj:=wPlate;",
+           "    MoveL pT,v100,fine,tMill\\WObj:=wPlate;", "  ENDPROC",
+           "  PROC Station1()", "    Stop;", "  ENDPROC"]
+    for first in range(0, n, 100):
+        out.append(f"  PROC Run{first // 100}()")
+        for k in range(first, min(n, first + 100)):
+            move = f"    MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"
+            out += ([f"    Place p{k} \\Speed:=v200, 20;"], [f"    Place p{k}, {10 + k % 7};"],
+                    [move, '    %"Station" + NumToStr(nStation, 0)%;'],
+                    [move, '    CallByVar "Station", nStation;'])[k % 4]
+        out.append("  ENDPROC")
+    return [*out, "ENDMODULE"]
+
+
+def _guards(n: int) -> list[str]:
+    """Guards written with parentheses, as a cell's programmer writes them: IF, ELSEIF and
+    WHILE conditions in brackets, compact IFs that RAISE, RETURN or assign, and a compact
+    IF whose call follows an aggregate's bracket straight away."""
+    out = [*_head("Guards"), "  VAR num nMode:=1;", "  VAR num nCount:=0;",
+           "  VAR num nWait:=0;", "  VAR bool bSkip:=FALSE;", "  VAR bool bReady:=TRUE;",
+           "  VAR string stReact{2};", "  VAR errnum ERR_COUNT:=-1;", *_decls(n)]
+    for first in range(0, n, 4):
+        moves = [f"MoveL p{k},v100,z1,tMill\\WObj:=wPlate;"
+                 for k in range(first, min(n, first + 4))]
+        out += [f"  PROC Part{first // 4}()", "    IF (nMode = 1 AND NOT bSkip) THEN",
+                *(f"      {m}" for m in moves[:2]), "    ELSEIF (nMode > 2) OR bSkip THEN",
+                "      nCount := (nCount + 1) MOD 10;", "    ENDIF",
+                "    IF (nCount >= 1000) RAISE ERR_COUNT;", "    IF (bSkip) RETURN;",
+                '    IF stReact=["Stop","Stop"]Stop;',
+                "    WHILE (nWait < 0) AND NOT bReady DO", "      nWait := nWait + 1;",
+                "    ENDWHILE", *(f"    {m}" for m in moves[2:]), "  ENDPROC"]
+    return [*out, "ENDMODULE"]
 
 
 def _assign(n: int) -> list[str]:
@@ -792,7 +853,8 @@ _BUILDERS = {"many_procs": _many_procs, "frames": _frames, "stacked": _stacked,
              "long_names": _long_names, "deep_calls": _deep_calls,
              "compact_ifs": _compact_ifs, "paren_calls": _paren_calls, "grids": _grids,
              "record_tables": _record_tables, "multimove": _multimove, "one_line": _one_line,
-             "labels": _labels, "computed": _computed}
+             "labels": _labels, "computed": _computed, "pallet": _pallet,
+             "callers": _callers, "guards": _guards}
 #: shapes whose statements share one line: their lines are counted as those of the shape
 #: written a statement to a line
 _PACKED = {"one_line": "hand_offs"}

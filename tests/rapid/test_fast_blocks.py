@@ -86,15 +86,21 @@ def test_nested_blocks_in_routines_are_one_token_with_the_plain_tree():
 
 
 def test_blocks_in_a_routine_the_reader_leaves_are_one_token_from_the_first_block():
-    """A routine with an ERROR handler naming error numbers is read by the parser; inside
-    it, the reader takes its statements from the first on."""
-    text = NESTED.replace("ENDPROC", "ERROR (41, 42)\n  RETRY;\nENDPROC")
+    """A routine with an ERROR handler naming a placeholder among its error numbers is read
+    by the parser; inside it, the reader takes its statements from the first on."""
+    text = NESTED.replace("ENDPROC", "ERROR (<EXP>, 42)\n  RETRY;\nENDPROC")
     assert tokens(text)[:6] == ["MODULE", "NAME", "FAST_PROC", "FAST_BLOCK", "ERROR", "OPEN_PAREN"]
     assert shape(parse_text(text)) == plain_tree(text)
 
 
+@pytest.mark.parametrize("numbers", ["()", "(1,)", "(1;", "(1\\A)", "(1]", "[1]", "((1)"])
+def test_error_numbers_that_do_not_read_are_the_parsers(numbers):
+    assert_parses_as_plain(NESTED.replace("ENDPROC", f"ERROR {numbers}\n  RETRY;\nENDPROC"))
+
+
 @pytest.mark.parametrize("handlers", [
     "ERROR\n  RETRY;\n", "UNDO\n  Stop;\nERROR\n  TRYNEXT;\n", "BACKWARD\n", "ERROR\n",
+    "ERROR (ERR_A, 41)\n  RETRY;\n", "ERROR(ERR_X)\n", "ERROR ( (1) ,\n f(\"a)\") )\n",
 ])
 def test_handlers_are_read_with_their_routine(handlers):
     text = NESTED.replace("ENDPROC", handlers + "ENDPROC")
@@ -343,7 +349,8 @@ def routine_text(draw: st.DrawFn) -> list[str]:
         out.append("VAR num late;")
         out += draw(statements(1))
     for _ in range(draw(st.integers(0, 2))):
-        out += [draw(st.sampled_from(["ERROR", "ERROR (41)", "UNDO", "BACKWARD"])),
+        out += [draw(st.sampled_from(["ERROR", "ERROR (41)", "ERROR (a, (1))",
+                                           "ERROR (1,)", "UNDO", "BACKWARD"])),
                 *draw(statements(1))]
     out.append(draw(st.sampled_from([closing] * 38 + ["ENDFUNC", "ENDPROC"])))
     return out
