@@ -152,6 +152,8 @@ _OPERATOR_WORD = re.compile(rf"(?i:AND|OR|XOR|NOT|DIV|MOD){WORD_END}")
 _WORD_CHAR = re.compile(rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
 # RAISE or RETURN of a value no fast terminal takes: the keyword, the value (group 2).
 _VALUED = re.compile(rf"(?i:(RAISE|RETURN)){WORD_END}((?:[^;\"]|{STRING})+);")
+# A statement's first word.
+_FIRST_WORD = re.compile(_NAME)
 # A label, `name:` (not `name:=`), its name in a group.
 _LABEL = re.compile(rf"({_NAME}){WS}*:(?!=)")
 # What follows ERROR when its handler names error numbers.
@@ -285,9 +287,7 @@ class Reader:
                 out.append(node)
                 pos = node.end
                 continue
-            node = (self._keyword_statement(at) or self._assignment(at) or self._connect(at)
-                    or self._label(at) or self._call(at) or self._compact_if(at)
-                    or self._valued(at))
+            node = self._loose(at)
             if node is None:
                 return out, pos, None, at, at
             done[pos] = (node.end, [node])
@@ -304,15 +304,28 @@ class Reader:
         return getattr(self.builder, f"{word.lower()}_stmt")(
             _Word(word, text, at, m.end(1)), _Word("SEMI", text, m.end() - 1, m.end()))
 
-    def _simple(self, at: int) -> Any:
-        """The node of a compact IF's statement at `at`, or None."""
-        node = (self._keyword_statement(at) or self._assignment(at) or self._call(at)
-                or self._valued(at) or self._connect(at))
-        if node is None:
-            head = self.heads["return"](self.text, at)
+    def _loose(self, at: int, simple: bool = False) -> Any:
+        """The node of a statement at `at` that no run or head takes, found loosely by
+        its first word (with `simple`, a compact IF's statement), or None."""
+        text = self.text
+        if text.startswith("%", at):
+            return self._call(at)
+        word = _FIRST_WORD.match(text, at)
+        if word is None:
+            return None
+        upper = word.group().upper()
+        if upper not in self.keywords:
+            return self._assignment(at) or (None if simple else self._label(at)) \
+                or self._call(at)
+        if upper == "IF":
+            return None if simple else self._compact_if(at)
+        if upper == "CONNECT":
+            return self._connect(at)
+        node = self._keyword_statement(at) or self._valued(at)
+        if node is None and simple and upper == "RETURN":
+            head = self.heads["return"](text, at)
             if head is not None:
-                node = self.builder.fast_return_stmt(
-                    _Word("FAST_RETURN", self.text, at, head.end()))
+                node = self.builder.fast_return_stmt(_Word("FAST_RETURN", text, at, head.end()))
         return node
 
     def _assignment(self, at: int) -> Any:
@@ -368,7 +381,7 @@ class Reader:
             if self._operator_around(start, end, statement_at):
                 continue
             cond = self._value(start, end)
-            statement = self._simple(statement_at)
+            statement = self._loose(statement_at, simple=True)
             if cond is None or statement is None:
                 return None
             return self.builder.compact_if(_Word("IF", text, at, at + 2), cond, statement)

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from mixed_shapes import mixed_program
 from more_shapes import MORE_SHAPES, more_moves
 from odd_shapes import ODD_SHAPES, odd_moves
 from program_shapes import SHAPES, shape_moves
@@ -54,4 +55,22 @@ def test_every_shape_rewrites_as_through_the_plain_grammar(name, comp, monkeypat
     assert fast.skipped == plain.skipped and fast.warnings == plain.warnings
     if name in SHAPES:
         assert not fast.skipped
+    assert fast.data == plain.data
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_mixes_of_statements_rewrite_as_through_the_plain_grammar(seed, comp,
+                                                                          monkeypatch):
+    # a seed's own mix of a cell's statements (mixed_shapes.py), 1,500 lines: past the
+    # warm-up, so the fast route reads it (the process's first characters are the plain
+    # grammar's), and the reader with every loose form in the mix
+    data = mixed_program(seed, 1500).encode()
+    monkeypatch.setattr(parse, "_read_plain", parse.WARM_UP_CHARS)
+    fast = rewrite_source(data, "t.mod", comp, RewriteOptions())
+    with monkeypatch.context() as patch:
+        patch.setattr(parse, "parse_text", _plain_parse_text)
+        patch.setattr(readback, "run_parser", _Refuse)
+        plain = rewrite_source(data, "t.mod", comp, RewriteOptions())
+    assert fast.moves_compensated == plain.moves_compensated > 0
+    assert fast.skipped == plain.skipped and fast.warnings == plain.warnings
     assert fast.data == plain.data

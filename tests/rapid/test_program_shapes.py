@@ -10,6 +10,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+from mixed_shapes import mixed_program
 from more_shapes import MORE_SHAPES, more_moves
 from odd_shapes import ODD_SHAPES, odd_moves
 from program_shapes import SHAPES, shape_moves
@@ -59,3 +60,12 @@ def test_odd_shapes_parse_to_the_plain_tree_and_model(name):
     assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
     program = assert_same_model(text)
     assert len(program.motions) >= N_MOVES // 2
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_mixes_of_statements_parse_to_the_plain_tree_and_model(seed):
+    # each seed its own mix of a cell's statements, routine length and nesting
+    # (mixed_shapes.py): the shapes a generator makes that no person chose
+    text = decode_source(mixed_program(seed, 400).encode(), "t").text
+    assert shape(fast_parser().parse(text)) == shape(rapid_parser().parse(text))
+    assert assert_same_model(text).motions
