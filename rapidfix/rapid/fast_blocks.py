@@ -114,7 +114,7 @@ _ASSIGNMENT = re.compile(
 # a string, the arguments (group 2) up to the first `;` outside a string.
 _CALL = re.compile(
     rf"({_NAME})(?:{WS}+(?![:=,;])|{WS}*(?=[\\(\[\"]))((?:[^;\"]|{STRING})+);")
-# A call without arguments (`Stop;`, which runs take, but not as a compact IF's own).
+# A call without arguments (`Stop;`: runs take it, but not as a compact IF's statement).
 _BARE_CALL = re.compile(rf"({_NAME}){WS}*;")
 # A late-bound call, `%expr% arguments;`: the expression (group 1: up to the next `%`
 # outside a string) and the arguments (group 2, perhaps none) up to the `;`.
@@ -733,7 +733,7 @@ class Reader:
                     if char != ")":
                         return None
                     values.append(self._value(piece, mark.start()))
-                    if None in values:
+                    if any(value is None for value in values):
                         return None
                     return self.builder.error_numbers(*values), mark.end()
             elif char == "," and depth == 1:
