@@ -373,7 +373,6 @@ def test_random_blocks_and_routines_parse_as_with_the_plain_grammar(text):
     assert_parses_as_plain(text)
 
 
-
 # ------------------------------------------------------------ random argument lists
 VALUES = ["(1)", "a", "(i-1)*2", "Offs(p1,(i-1)*d,0,h)", '"a,b\\\\c;"', '"q""\\\\"', "[1,(2)]",
           "a{(1)}", "Baz(\\A:=1, 2)", "CRobT(\\Tool:=t \\WObj:=w)", "NOT b", "-(1)", "x = [1,2]",
