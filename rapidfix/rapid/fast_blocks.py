@@ -152,6 +152,11 @@ _OPERATOR_WORD = re.compile(rf"(?i:AND|OR|XOR|NOT|DIV|MOD){WORD_END}")
 _WORD_CHAR = re.compile(rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
 # RAISE or RETURN of a value no fast terminal takes: the keyword, the value (group 2).
 _VALUED = re.compile(rf"(?i:(RAISE|RETURN)){WORD_END}((?:[^;\"]|{STRING})+);")
+# A word that begins with a keyword of a module item, or ENDMODULE, and goes on
+# (`PERSspeeddata`, `LOCALPERS`): a name, or the keyword read out of it (module_items).
+_GLUED_KEYWORD = re.compile(
+    rf"(?i:LOCAL|TASK|VAR|PERS|CONST|PROC|FUNC|TRAP|RECORD|ALIAS|ENDMODULE)"
+    rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
 # A statement's first word.
 _FIRST_WORD = re.compile(_NAME)
 # A label, `name:` (not `name:=`), its name in a group.
@@ -751,10 +756,12 @@ class Reader:
         does not read ends them."""
         text, heads = self.text, self.heads
         out: list = []
+        decls_from: tuple[int, int] | None = None  # before the last items, if declarations
         while pos >= self.resume:
             at = _GAP.match(text, pos).end()
             decls = self.decls(text, at)
             if decls is not None:
+                decls_from = (pos, len(out))
                 out += self.split_decls(decls.group(), at)
                 pos = decls.end()
                 continue
@@ -763,6 +770,14 @@ class Reader:
                 if head is not None:
                     break
             else:
+                if decls_from is not None and _GLUED_KEYWORD.match(text, at):
+                    # after declarations the plain grammar's state takes a name (LALR
+                    # merged a module's data with a routine body's): `PERSspeeddata` is
+                    # a name there, and wrong; after this token no name is taken, and
+                    # the contextual lexer would read PERS out of the word. The
+                    # declarations are left to the parser, which meets it as a name.
+                    pos, count = decls_from
+                    del out[count:]
                 break
             try:
                 node = self.routine(head, kind)
@@ -771,6 +786,7 @@ class Reader:
                 break
             out.append(node)
             pos = node.end
+            decls_from = None
         return out, pos
 
 

@@ -12,6 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the comparisons of the fast path tests
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from mixed_shapes import mixed_program
 from test_fastpath import assert_parses_as_plain, module, plain_tree, routine, shape
 
 from rapidfix.exceptions import RapidSyntaxError
@@ -134,6 +136,19 @@ def test_data_after_a_run_of_declarations_in_a_routine_is_no_module_item(data):
     kinds = tokens(text)
     assert "FAST_ROUTINES" not in kinds and kinds.count("FAST_BLOCK") == 1
     assert shape(parse_text(text)) == plain_tree(text)
+
+
+@pytest.mark.parametrize("glued", [
+    "PERSspeeddata v:=[1,2,3,4];", "LOCALPERS num n:=1;", "VARnum n;", "PROCtwo()",
+    "ENDMODULEx", "TASKPERS num n:=1;", "RECORDr", "CONSTnum k:=1;",
+])
+@pytest.mark.parametrize("before", [["VAR num a;", "VAR num b:=2;"], ["PROC main()", "ENDPROC"],
+                                    ["PROC main()", "ENDPROC", "VAR num a;"]])
+def test_a_word_glued_to_a_keyword_after_module_items_is_the_plain_grammars(glued, before):
+    """Found by damaging real files: `PERSspeeddata` after declarations is a name to the
+    plain grammar (its state there takes one) and an error; after the reader's token the
+    contextual lexer read PERS out of the word. After a routine both read the keyword."""
+    assert_parses_as_plain(module(*before, glued, "PROC last()", f"  {MOVE}", "ENDPROC"))
 
 
 @pytest.mark.parametrize("piece", [
@@ -415,3 +430,22 @@ def test_random_argument_lists_parse_as_with_the_plain_grammar(calls):
     brackets and strings: the same tree as the plain grammar's, or the same error."""
     assert_parses_as_plain(routine("IF a THEN", *(f"  {c}" for c in calls), f"  {MOVE}",
                                    "ENDIF"))
+
+
+# ------------------------------------------------------------ damaged programs
+DAMAGE = [",", "\\", "(", ")", "[", "]", ";", '"', "%", "\n", "IF ", " THEN", " DO", ":=",
+          "?", "{", "}", " AND", "<ARG>", "RAISE ", "!", ""]
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 40), st.floats(0, 1), st.sampled_from(DAMAGE), st.integers(0, 12))
+def test_damaged_mixes_of_statements_parse_or_fail_as_with_the_plain_grammar(
+        seed, where, damage, cut):
+    """A random mix of a cell's statements (mixed_shapes.py) with one piece of damage
+    (a separator, bracket, quote or keyword put in, or characters taken out) somewhere in
+    its routines: the reader and the fast terminals give the plain grammar's tree, or
+    refuse the text as it does."""
+    text = mixed_program(seed, 120)
+    first = text.index("  PROC ")
+    at = first + int(where * (len(text) - first - 12))
+    assert_parses_as_plain(text[:at] + damage + text[at + (0 if damage else cut):])
