@@ -45,7 +45,9 @@ from rapidfix.rapid.fast_expressions import (
     LATIN1_LETTERS,
     NAME,
     STRING,
+    WORD_CHAR,
     WORD_END,
+    WORD_START,
     WS,
     WS_CHARS,
 )
@@ -119,12 +121,11 @@ _BARE_CALL = re.compile(rf"({_NAME}){WS}*;")
 # A late-bound call, `%expr% arguments;`: the expression (group 1: up to the next `%`
 # outside a string) and the arguments (group 2, perhaps none) up to the `;`.
 _LATE_CALL = re.compile(rf"%((?:[^%;\"]|{STRING})+)%((?:[^;\"]|{STRING})*);")
-# What splits an argument list (a comma, a backslash) and what it steps over: strings, and
-# brackets of every kind (the commas and backslashes inside them are an argument's own).
-_ARGUMENT_MARKS = re.compile(rf"{STRING}|[,\\()\[\]{{}}]")
-_OPENERS, _CLOSERS = frozenset("([{"), frozenset(")]}")
-# The same, and the `;` no list of values holds outside a string.
+# What splits a list of arguments or values (a comma, a backslash), what it steps over
+# (strings, and brackets of every kind: the commas and backslashes inside them are an
+# item's own), and the `;` no such list holds outside a string.
 _LIST_MARKS = re.compile(rf"{STRING}|[,\\()\[\]{{}};]")
+_OPENERS, _CLOSERS = frozenset("([{"), frozenset(")]}")
 # An optional argument's name after its backslash.
 _OPTIONAL_NAME = re.compile(rf"{WS}*({_NAME}){WS}*")
 # A required argument given by name, `name := value`: the name.
@@ -132,9 +133,8 @@ _NAMED = re.compile(rf"{WS}*({_NAME}){WS}*:=")
 # A head no fast terminal takes (its condition one the patterns leave out): the keyword
 # (group 1), the condition (group 2) and the word after it (group 3: THEN or DO, the
 # first outside a string; neither stands in an expression).
-_WORD_START = rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])"
 _LOOSE_HEADS = {
-    kind: re.compile(rf"(?i:({kind})){WORD_END}((?:[^;\"]|{STRING})*?){_WORD_START}"
+    kind: re.compile(rf"(?i:({kind})){WORD_END}((?:[^;\"]|{STRING})*?){WORD_START}"
                      rf"(?i:({after})){WORD_END}")
     for kind, after in (("if", "THEN"), ("elseif", "THEN"), ("while", "DO"))}
 # A compact IF's condition: where a name (or a late call's `%`) follows the end of an
@@ -144,19 +144,19 @@ _LOOSE_HEADS = {
 # (_STATEMENT_AHEAD). Strings and brackets are stepped over.
 _COMPACT_IF = re.compile(rf"(?i:IF){WORD_END}{WS}*")
 _CONDITION_MARKS = re.compile(
-    rf"{STRING}|[()\[\]{{}}]|([A-Za-z0-9_{LATIN1_LETTERS}]){WS}+(?=[A-Za-z{LATIN1_LETTERS}%])"
+    rf"{STRING}|[()\[\]{{}}]|({WORD_CHAR}){WS}+(?=[A-Za-z{LATIN1_LETTERS}%])"
     rf"|;")
 _STATEMENT_AHEAD = re.compile(rf"{WS}*(?=[A-Za-z{LATIN1_LETTERS}%])")
 _WORD_OPERATORS = frozenset(("AND", "OR", "XOR", "NOT", "DIV", "MOD"))
 _OPERATOR_WORD = re.compile(rf"(?i:AND|OR|XOR|NOT|DIV|MOD){WORD_END}")
-_WORD_CHAR = re.compile(rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
+_WORD_CHAR = re.compile(WORD_CHAR)
 # RAISE or RETURN of a value no fast terminal takes: the keyword, the value (group 2).
 _VALUED = re.compile(rf"(?i:(RAISE|RETURN)){WORD_END}((?:[^;\"]|{STRING})+);")
 # A word that begins with a keyword of a module item, or ENDMODULE, and goes on
 # (`PERSspeeddata`, `LOCALPERS`): a name, or the keyword read out of it (module_items).
 _GLUED_KEYWORD = re.compile(
     rf"(?i:LOCAL|TASK|VAR|PERS|CONST|PROC|FUNC|TRAP|RECORD|ALIAS|ENDMODULE)"
-    rf"[A-Za-z0-9_{LATIN1_LETTERS}]")
+    rf"{WORD_CHAR}")
 # A statement's first word.
 _FIRST_WORD = re.compile(_NAME)
 # A label, `name:` (not `name:=`), its name in a group.
@@ -190,6 +190,11 @@ class _Word:
 
     def __str__(self) -> str:
         return self.text[self.start_pos:self.end_pos]
+
+
+def _semi(text: str, end: int) -> _Word:
+    """The `;` that ends at `end`."""
+    return _Word("SEMI", text, end - 1, end)
 
 
 class _LooseHead:
@@ -307,14 +312,14 @@ class Reader:
             return None
         word = m.group(1).upper()
         return getattr(self.builder, f"{word.lower()}_stmt")(
-            _Word(word, text, at, m.end(1)), _Word("SEMI", text, m.end() - 1, m.end()))
+            _Word(word, text, at, m.end(1)), _semi(text, m.end()))
 
     def _loose(self, at: int, simple: bool = False) -> Any:
         """The node of a statement at `at` that no run or head takes, found loosely by
         its first word (with `simple`, a compact IF's statement), or None."""
         text = self.text
         if text.startswith("%", at):
-            return self._call(at)
+            return self._late_call(at)
         word = _FIRST_WORD.match(text, at)
         if word is None:
             return None
@@ -415,22 +420,20 @@ class Reader:
         word = m.group(1).upper()
         make = self.builder.raise_stmt if word == "RAISE" else self.builder.return_stmt
         return make(_Word(word, text, *m.span(1)), value,
-                    _Word("SEMI", text, m.end() - 1, m.end()))
+                    _semi(text, m.end()))
 
     def _call(self, at: int) -> Any:
         """The node of a procedure call at `at` that no run of calls takes (values the
         runs' patterns leave out: `MoveL Offs(p, (i-1)*d, 0, h), v500, z10, t;`,
         `WaitUntil a = [1,2] \\MaxTime:=3;`), or None."""
         text = self.text
-        if text.startswith("%", at):
-            return self._late_call(at)
         m = _CALL.match(text, at)
         if m is None:
             bare = _BARE_CALL.match(text, at)
             if bare is None or bare.group(1).upper() in self.keywords:
                 return None
             return self.builder.procedure_call(_Word("NAME", text, *bare.span(1)),
-                                               _Word("SEMI", text, bare.end() - 1, bare.end()))
+                                               _semi(text, bare.end()))
         if m.group(1).upper() in self.keywords:
             return None
         arguments = self._arguments(*m.span(2))
@@ -438,7 +441,7 @@ class Reader:
             return None
         return self.builder.procedure_call(
             _Word("NAME", text, *m.span(1)), arguments,
-            _Word("SEMI", text, m.end() - 1, m.end()))
+            _semi(text, m.end()))
 
     def _late_call(self, at: int) -> Any:
         """The node of a late-bound call `%expr% arguments;` at `at`, or None."""
@@ -449,7 +452,7 @@ class Reader:
         target = self._value(*m.span(1))
         if target is None:
             return None
-        semi = _Word("SEMI", text, m.end() - 1, m.end())
+        semi = _semi(text, m.end())
         percent = _Word("PERCENT", text, at, at + 1)
         if not m.group(2).strip(WS_CHARS):
             return builder.late_call(percent, target, semi)
@@ -465,7 +468,7 @@ class Reader:
         text = self.text
         cuts: list[int] = []  # each `,` and `\\` outside brackets and strings
         depth = 0
-        for m in _ARGUMENT_MARKS.finditer(text, start, end):
+        for m in _LIST_MARKS.finditer(text, start, end):
             char = text[m.start()]
             if char in _OPENERS:
                 depth += 1
@@ -560,7 +563,7 @@ class Reader:
         target = builder.name_ref(_Word("NAME", text, m.start(1), m.end(1)))
         return builder.connect_stmt(
             _Word("CONNECT", text, at, at + 7), target, _Word("WITH", text, *m.span(2)),
-            _Word("NAME", text, *m.span(3)), _Word("SEMI", text, m.end() - 1, m.end()))
+            _Word("NAME", text, *m.span(3)), _semi(text, m.end()))
 
     def _body(self, pos: int, *closing: str) -> tuple[list, str, int, int]:
         """Statements up to one of the `closing` keywords, or _Unread."""

@@ -52,9 +52,13 @@ NUMERIC_AGGREGATE = (rf"\[\s*(?:{_N}|\[\s*{_N}(?:\s*,\s*{_N})*\s*\])"
 # plain grammar reads its statement.
 LATIN1_LETTERS = r"\u00c0-\u00d6\u00d8-\u00f6\u00f8-\u00ff"
 NAME_START = rf"[A-Za-z{LATIN1_LETTERS}]"
-NAME = rf"{NAME_START}[A-Za-z0-9_{LATIN1_LETTERS}]*"
+#: a character of a name after its first (a letter of ISO 8859-1, a digit or '_')
+WORD_CHAR = rf"[A-Za-z0-9_{LATIN1_LETTERS}]"
+NAME = rf"{NAME_START}{WORD_CHAR}*"
 # A name ends where no letter (of ISO 8859-1, as rapid.lark's NAME), digit or '_' follows.
-WORD_END = rf"(?![A-Za-z0-9_{LATIN1_LETTERS}])"
+WORD_END = rf"(?!{WORD_CHAR})"
+# ... and starts where none stands before it.
+WORD_START = rf"(?<!{WORD_CHAR})"
 # What may stand between two statements of a run: whitespace and whole-line comments
 # (the grammar's COMMENT, `![^\n]*`, here with its newline: a comment cannot then be
 # cut short on backtracking, so nothing inside it is ever read as a statement).
@@ -279,7 +283,7 @@ def condition_pattern(name: str, stop: str | None = None) -> str:
 _NAME = NAME
 _INDEX_ITEM = f"(?:{NUMBER}|{_NAME})"
 # (NOT before parentheses is the operator, not a function's name: `NOT (a)`)
-_NOT = rf"(?i:NOT)(?![A-Za-z0-9_{LATIN1_LETTERS}])"
+_NOT = rf"(?i:NOT){WORD_END}"
 PLAIN_VALUE = re.compile(
     rf"(?:-{WS}*)?(?:{NUMBER})|(?!{_NOT}){_NAME}(?:{WS}*(?:{_nested('(', ')')}"
     rf"|\{{{WS}*{_INDEX_ITEM}(?:{WS}*,{WS}*{_INDEX_ITEM})*{WS}*\}}))?")
@@ -301,7 +305,7 @@ NUMERIC_AGGREGATE_MATCH = _AGGREGATE.match
 # then whitespace and the ',' or ']' after it (_Reader._item)
 _LITERAL_ITEM = re.compile(
     rf"{WS}*(?:(?:([-+]){WS}*)?({NUMBER})|({STRING})|((?i:TRUE|FALSE))"
-    rf"(?![A-Za-z0-9_{LATIN1_LETTERS}]))(?={WS}*[,\]])")
+    rf"{WORD_END})(?={WS}*[,\]])")
 _BOOLS = {"TRUE": True, "FALSE": False}
 _NONE: frozenset[str] = frozenset()
 # LE, GE and NE before LT, GT and EQ: the lexer takes the longest

@@ -84,6 +84,7 @@ from rapidfix.rapid.fast_expressions import (  # (WS and GAP: also readback's)
     PLAIN_VALUE,
     STRING,
     WORD_END,
+    WORD_START,
     WS,
     NotRead,
     condition_pattern,
@@ -237,7 +238,7 @@ def _patterns() -> dict[str, str]:
 
 def _keyword(words: str) -> str:
     """A keyword after a condition: a whole word (`IF bTHEN THEN`)."""
-    return rf"(?<![A-Za-z0-9_{LATIN1_LETTERS}])(?i:{words}){WORD_END}"
+    return rf"{WORD_START}(?i:{words}){WORD_END}"
 
 
 # A routine's parameters, as rapid.lark's `parameters` takes them but for alternatives
